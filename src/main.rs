@@ -1,0 +1,170 @@
+//! The `hooke` command: the desktop app, and headless runs of scenes.
+
+use clap::{Args, Parser, Subcommand};
+use hooke::runner::{self, Duration, Overrides};
+use hooke::scene::presets;
+use hooke::sim::Integrator;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+/// An interactive 2D mass-spring simulator.
+#[derive(Parser, Debug)]
+#[command(name = "hooke", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    #[command(flatten)]
+    app: AppArgs,
+}
+
+/// Options of the desktop app (no subcommand).
+#[derive(Args, Debug, Clone)]
+struct AppArgs {
+    /// Scene file to open, or a built-in scene name (empty, rope, cloth32, soft_box).
+    #[arg(long, default_value = presets::DEFAULT_SCENE)]
+    scene: String,
+    /// Start running even if the scene starts paused.
+    #[arg(long)]
+    run: bool,
+    /// Save a screenshot to this PNG after --screenshot-after seconds.
+    #[arg(long, hide = true)]
+    screenshot: Option<PathBuf>,
+    #[arg(long, hide = true, default_value_t = 2.0)]
+    screenshot_after: f64,
+    /// Quit after this many seconds (for scripted runs).
+    #[arg(long, hide = true)]
+    exit_after: Option<f64>,
+    /// Write a JSON status line (particles, springs, steps, fps, ...) to this file twice a second.
+    #[arg(long, hide = true)]
+    report: Option<PathBuf>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Run a scene headless (no window, no GPU) and report.
+    #[command(allow_negative_numbers = true)]
+    Run(RunArgs),
+}
+
+#[derive(Args, Debug)]
+struct RunArgs {
+    /// Scene file, or a built-in scene name.
+    #[arg(long)]
+    scene: String,
+    #[arg(long, value_enum)]
+    integrator: Option<Integrator>,
+    /// Time step in seconds (overrides the scene's).
+    #[arg(long)]
+    dt: Option<f64>,
+    /// Number of steps to run.
+    #[arg(long, conflicts_with = "time")]
+    steps: Option<u64>,
+    /// Simulated seconds to run (rounded to whole steps).
+    #[arg(long)]
+    time: Option<f64>,
+    /// Stiffness for every spring, N/m.
+    #[arg(long)]
+    stiffness: Option<f64>,
+    /// Damping rate μ, 1/s (overrides the scene's).
+    #[arg(long)]
+    damping: Option<f64>,
+    /// Write the final state as CSV (id,x,y,vx,vy).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Print one JSON object instead of a summary.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Exit codes.
+const BAD_INPUT: u8 = 2;
+const BLEW_UP: u8 = 3;
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        None => open_app(cli.app),
+        Some(Command::Run(args)) => run(args),
+    }
+}
+
+fn fail(message: impl std::fmt::Display) -> ExitCode {
+    eprintln!("hooke: {message}");
+    ExitCode::from(BAD_INPUT)
+}
+
+fn run(args: RunArgs) -> ExitCode {
+    let loaded = match presets::resolve(&args.scene) {
+        Ok(l) => l,
+        Err(e) => return fail(e),
+    };
+    let duration = match (args.steps, args.time) {
+        (Some(n), _) => Duration::Steps(n),
+        (None, Some(t)) => Duration::Time(t),
+        (None, None) => Duration::Time(1.0),
+    };
+    let overrides = Overrides {
+        integrator: args.integrator,
+        dt: args.dt,
+        stiffness: args.stiffness,
+        damping: args.damping,
+    };
+    let run = match runner::run(&loaded, &overrides, duration) {
+        Ok(r) => r,
+        Err(e) => return fail(e),
+    };
+    if let Some(path) = &args.out
+        && let Err(e) = run.save_csv(path)
+    {
+        return fail(format!("cannot write {}: {e}", path.display()));
+    }
+    let r = &run.report;
+    if args.json {
+        match serde_json::to_string(r) {
+            Ok(s) => println!("{s}"),
+            Err(e) => return fail(e),
+        }
+    } else {
+        println!(
+            "{}: {} particles, {} springs, {} x {} steps of {} s = {:.4} s simulated",
+            r.scene, r.particles, r.springs, r.integrator, r.steps_taken, r.dt, r.sim_time
+        );
+        println!(
+            "wall {:.3} s: {:.0} steps/s, {:.2} M spring updates/s; energy {:.6} J -> {:.6} J",
+            r.wall_s,
+            r.steps_per_s,
+            r.spring_updates_per_s / 1e6,
+            r.energy_start,
+            r.energy_end
+        );
+    }
+    if !r.finite {
+        eprintln!(
+            "hooke: the simulation blew up (non-finite state) at step {}",
+            r.blowup_step.map_or("?".into(), |s| s.to_string())
+        );
+        return ExitCode::from(BLEW_UP);
+    }
+    ExitCode::SUCCESS
+}
+
+#[cfg(feature = "gui")]
+fn open_app(args: AppArgs) -> ExitCode {
+    let loaded = match presets::resolve(&args.scene) {
+        Ok(l) => l,
+        Err(e) => return fail(e),
+    };
+    let options = hooke::ui::AppOptions {
+        start_running: args.run,
+        screenshot: args.screenshot.map(|p| (p, args.screenshot_after)),
+        exit_after: args.exit_after,
+        report: args.report,
+    };
+    hooke::ui::run_app(loaded, options);
+    ExitCode::SUCCESS
+}
+
+#[cfg(not(feature = "gui"))]
+fn open_app(_args: AppArgs) -> ExitCode {
+    fail("this build has no window (built without the `gui` feature); use `hooke run`")
+}

@@ -1,0 +1,244 @@
+//! Reading scene files and putting scenes into a Bevy world.
+
+use super::format::Scene;
+use super::generate::Expanded;
+use super::validate::validate;
+use crate::sim::*;
+use bevy::math::DVec2;
+use bevy::prelude::*;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// Why a scene could not be loaded. Every variant names the file.
+#[derive(Debug)]
+pub enum SceneError {
+    Io {
+        path: PathBuf,
+        error: std::io::Error,
+    },
+    /// The file is not valid RON for the schema.
+    Parse {
+        path: PathBuf,
+        line: usize,
+        col: usize,
+        message: String,
+    },
+    /// The file parses but describes an impossible scene.
+    Invalid {
+        path: PathBuf,
+        problems: Vec<String>,
+    },
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SceneError::Io { path, error } => {
+                write!(f, "cannot read scene {}: {error}", path.display())
+            }
+            SceneError::Parse {
+                path,
+                line,
+                col,
+                message,
+            } => write!(f, "{}:{line}:{col}: {message}", path.display()),
+            SceneError::Invalid { path, problems } => {
+                write!(f, "invalid scene {}:", path.display())?;
+                for p in problems {
+                    write!(f, "\n  - {p}")?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+/// A scene that passed validation, with its generators expanded.
+#[derive(Debug, Clone)]
+pub struct LoadedScene {
+    /// Where it came from, if from a file.
+    pub path: Option<PathBuf>,
+    pub scene: Scene,
+    pub expanded: Expanded,
+}
+
+impl LoadedScene {
+    pub fn from_scene(scene: Scene, path: Option<PathBuf>) -> Result<Self, SceneError> {
+        let invalid = |problems| SceneError::Invalid {
+            path: path.clone().unwrap_or_else(|| "<scene>".into()),
+            problems,
+        };
+        let expanded = validate(&scene).map_err(invalid)?;
+        Ok(LoadedScene {
+            path,
+            scene,
+            expanded,
+        })
+    }
+
+    /// Parses and validates RON text; `path` only names the source in errors.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, SceneError> {
+        let scene: Scene = ron::from_str(text).map_err(|e| SceneError::Parse {
+            path: path.to_owned(),
+            line: e.span.start.line,
+            col: e.span.start.col,
+            message: e.code.to_string(),
+        })?;
+        Self::from_scene(scene, Some(path.to_owned()))
+    }
+
+    pub fn read(path: &Path) -> Result<Self, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|error| SceneError::Io {
+            path: path.to_owned(),
+            error,
+        })?;
+        Self::parse(&text, path)
+    }
+
+    pub fn name(&self) -> String {
+        self.path
+            .as_ref()
+            .and_then(|p| p.file_stem())
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "untitled".into())
+    }
+}
+
+/// The scene the world was loaded from, kept for reset and the click rules.
+#[derive(Resource, Debug, Clone)]
+pub struct CurrentScene(pub LoadedScene);
+
+/// Replaces everything in the world's simulation with the scene: despawns all particles and
+/// springs, sets the parameters, resets clock, status and counters, and spawns the scene.
+pub fn load_into_world(world: &mut World, loaded: &LoadedScene) {
+    let old: Vec<Entity> = world
+        .query_filtered::<Entity, Or<(With<Particle>, With<Spring>)>>()
+        .iter(world)
+        .collect();
+    for e in old {
+        world.despawn(e);
+    }
+    let s = &loaded.scene;
+    let paused = s.start_paused;
+    *world.resource_mut::<SimParams>() = SimParams {
+        gravity: DVec2::from(s.gravity),
+        damping: s.damping,
+        ground: s.ground,
+        integrator: s.integrator,
+        dt: s.dt,
+        paused,
+        stiffness_override: None,
+    };
+    world.insert_resource(SimClock::default());
+    world.insert_resource(SimStatus::default());
+    world.insert_resource(PassCounts::default());
+    world.insert_resource(Solver::default());
+    spawn_expanded(world, &loaded.expanded);
+    world.insert_resource(CurrentScene(loaded.clone()));
+}
+
+/// Spawns particles and springs; springs index into the particles given here.
+pub fn spawn_expanded(world: &mut World, expanded: &Expanded) -> Vec<Entity> {
+    let mut serials = world.resource_mut::<Serials>();
+    let first = serials.next();
+    for _ in 1..expanded.particles.len() + expanded.springs.len() {
+        serials.next();
+    }
+    let mut particles = Vec::with_capacity(expanded.particles.len());
+    for (i, p) in expanded.particles.iter().enumerate() {
+        let bundle = (
+            Particle {
+                serial: first + i as u64,
+            },
+            Position(DVec2::from(p.pos)),
+            Velocity(if p.pinned {
+                DVec2::ZERO
+            } else {
+                DVec2::from(p.vel)
+            }),
+            Mass(p.mass),
+        );
+        let mut e = world.spawn(bundle);
+        if p.pinned {
+            e.insert(Pinned);
+        }
+        particles.push(e.id());
+    }
+    let base = first + expanded.particles.len() as u64;
+    world.spawn_batch(
+        expanded
+            .springs
+            .iter()
+            .enumerate()
+            .map(|(i, s)| Spring {
+                a: particles[s.a],
+                b: particles[s.b],
+                rest: s.rest,
+                stiffness: s.stiffness,
+                serial: base + i as u64,
+            })
+            .collect::<Vec<_>>(),
+    );
+    particles
+}
+
+/// The world's current particles and springs as an explicit scene (for saving what a user made).
+pub fn snapshot(world: &mut World) -> Scene {
+    let params = world.resource::<SimParams>().clone();
+    let mut particles: Vec<(u64, Entity, super::format::ParticleDef)> = world
+        .query::<(Entity, &Particle, &Position, &Velocity, &Mass, Has<Pinned>)>()
+        .iter(world)
+        .map(|(e, p, x, v, m, pinned)| {
+            let def = super::format::ParticleDef {
+                pos: (x.0.x, x.0.y),
+                vel: (v.0.x, v.0.y),
+                mass: m.0,
+                pinned,
+            };
+            (p.serial, e, def)
+        })
+        .collect();
+    particles.sort_by_key(|p| p.0);
+    let index: bevy::ecs::entity::EntityHashMap<usize> = particles
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (p.1, i))
+        .collect();
+    let mut springs: Vec<(u64, super::format::SpringDef)> = world
+        .query::<&Spring>()
+        .iter(world)
+        .filter_map(|s| {
+            let def = super::format::SpringDef {
+                a: *index.get(&s.a)?,
+                b: *index.get(&s.b)?,
+                stiffness: params.stiffness_override.unwrap_or(s.stiffness),
+                rest: s.rest,
+            };
+            Some((s.serial, def))
+        })
+        .collect();
+    springs.sort_by_key(|s| s.0);
+    let click = world.get_resource::<CurrentScene>().and_then(|c| c.0.scene.click);
+    Scene {
+        gravity: (params.gravity.x, params.gravity.y),
+        damping: params.damping,
+        ground: params.ground,
+        integrator: params.integrator,
+        dt: params.dt,
+        particles: particles.into_iter().map(|p| p.2).collect(),
+        springs: springs.into_iter().map(|s| s.1).collect(),
+        generate: vec![],
+        click,
+        start_paused: false,
+    }
+}
+
+/// Writes a scene as RON.
+pub fn to_ron(scene: &Scene) -> Result<String, ron::Error> {
+    let config = ron::ser::PrettyConfig::new()
+        .depth_limit(2)
+        .struct_names(false);
+    ron::ser::to_string_pretty(scene, config)
+}

@@ -1,0 +1,12 @@
+//! Scenes: the RON file format, parametric generators, validation and loading.
+
+pub mod format;
+pub mod generate;
+pub mod load;
+pub mod presets;
+pub mod validate;
+
+pub use format::*;
+pub use generate::Expanded;
+pub use load::{CurrentScene, LoadedScene, SceneError, load_into_world, snapshot, to_ron};
+pub use validate::validate;

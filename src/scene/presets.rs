@@ -1,0 +1,45 @@
+//! The scenes that ship with hooke. They are files in `assets/scenes/`, also compiled into the
+//! binary so that `--scene cloth32` works from any directory.
+
+use super::load::{LoadedScene, SceneError};
+use std::path::{Path, PathBuf};
+
+/// Built-in scenes: (name, RON text).
+pub const BUILTIN: &[(&str, &str)] = &[
+    ("empty", include_str!("../../assets/scenes/empty.ron")),
+    ("rope", include_str!("../../assets/scenes/rope.ron")),
+    ("cloth32", include_str!("../../assets/scenes/cloth32.ron")),
+    ("soft_box", include_str!("../../assets/scenes/soft_box.ron")),
+];
+
+/// The scene the app opens with: the assignment's empty canvas.
+pub const DEFAULT_SCENE: &str = "empty";
+
+/// Loads a scene by file path or, when no such file exists, by built-in name.
+pub fn resolve(name_or_path: &str) -> Result<LoadedScene, SceneError> {
+    let path = Path::new(name_or_path);
+    if !path.exists()
+        && let Some((name, text)) = BUILTIN.iter().find(|(n, _)| *n == name_or_path)
+    {
+        return LoadedScene::parse(text, &PathBuf::from(format!("assets/scenes/{name}.ron")));
+    }
+    LoadedScene::read(path)
+}
+
+/// Scene files found in a directory (sorted), for the scene picker.
+pub fn scene_files(dir: &Path) -> Vec<PathBuf> {
+    let mut out = vec![];
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return out;
+    };
+    for e in entries.flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            out.extend(scene_files(&p));
+        } else if p.extension().is_some_and(|x| x == "ron") {
+            out.push(p);
+        }
+    }
+    out.sort();
+    out
+}

@@ -1,0 +1,181 @@
+//! Scene validation: every problem is named with where it is, so a user can fix the file.
+
+use super::format::*;
+use super::generate::Expanded;
+use crate::sim::Integrator;
+
+/// Scenes larger than this are refused before anything is allocated for them.
+pub const MAX_PARTICLES: usize = 20_000_000;
+pub const MAX_SPRINGS: usize = 80_000_000;
+/// At most this many problems are listed; the rest are counted.
+const MAX_LISTED: usize = 20;
+
+/// Checks a scene and expands its generators. On failure, returns every problem found.
+pub fn validate(scene: &Scene) -> Result<Expanded, Vec<String>> {
+    let mut p = Problems::default();
+    let finite2 = |v: (f64, f64)| v.0.is_finite() && v.1.is_finite();
+
+    if !finite2(scene.gravity) {
+        p.push(format!("gravity: must be finite, got {:?}", scene.gravity));
+    }
+    if !(scene.damping.is_finite() && scene.damping >= 0.0) {
+        p.push(format!(
+            "damping: must be finite and >= 0, got {}",
+            scene.damping
+        ));
+    }
+    if let Some(g) = scene.ground.filter(|g| !g.is_finite()) {
+        p.push(format!("ground: must be finite, got {g}"));
+    }
+    if !(scene.dt.is_finite() && scene.dt > 0.0) {
+        p.push(format!("dt: must be finite and > 0, got {}", scene.dt));
+    }
+    if !scene.integrator.is_available() {
+        p.push(format!(
+            "integrator: {:?} is not implemented in this build (available: {})",
+            scene.integrator,
+            available_integrators()
+        ));
+    }
+    if let Some(c) = &scene.click {
+        if !(c.radius.is_finite() && c.radius >= 0.0) {
+            p.push(format!("click.radius: must be finite and >= 0, got {}", c.radius));
+        }
+        check_mass(&mut p, "click", c.mass);
+        check_stiffness(&mut p, "click", c.stiffness);
+    }
+
+    let (mut n_particles, mut n_springs) = (scene.particles.len(), scene.springs.len());
+    for (i, g) in scene.generate.iter().enumerate() {
+        let at = format!("generate[{i}]");
+        match *g {
+            Generator::Grid {
+                cols,
+                rows,
+                min,
+                max,
+                mass,
+                stiffness,
+                vel,
+                ..
+            } => {
+                if cols < 2 || rows < 2 {
+                    p.push(format!("{at}: a grid needs cols >= 2 and rows >= 2, got {cols} x {rows}"));
+                }
+                if !(finite2(min) && finite2(max) && finite2(vel)) {
+                    p.push(format!("{at}: min, max and vel must be finite"));
+                }
+                check_mass(&mut p, &at, mass);
+                check_stiffness(&mut p, &at, stiffness);
+            }
+            Generator::Chain {
+                from,
+                to,
+                segments,
+                mass,
+                stiffness,
+                ..
+            } => {
+                if segments < 1 {
+                    p.push(format!("{at}: a chain needs segments >= 1"));
+                }
+                if !(finite2(from) && finite2(to)) {
+                    p.push(format!("{at}: from and to must be finite"));
+                }
+                check_mass(&mut p, &at, mass);
+                check_stiffness(&mut p, &at, stiffness);
+            }
+        }
+        let (np, ns) = g.counts();
+        n_particles = n_particles.saturating_add(np);
+        n_springs = n_springs.saturating_add(ns);
+    }
+    if n_particles > MAX_PARTICLES || n_springs > MAX_SPRINGS {
+        p.push(format!(
+            "the scene has {n_particles} particles and {n_springs} springs; at most \
+             {MAX_PARTICLES} particles and {MAX_SPRINGS} springs are supported"
+        ));
+    }
+    if !p.list.is_empty() {
+        return Err(p.finish());
+    }
+
+    for (i, q) in scene.particles.iter().enumerate() {
+        let at = format!("particles[{i}]");
+        if !finite2(q.pos) {
+            p.push(format!("{at}: pos must be finite, got {:?}", q.pos));
+        }
+        if !finite2(q.vel) {
+            p.push(format!("{at}: vel must be finite, got {:?}", q.vel));
+        }
+        check_mass(&mut p, &at, q.mass);
+    }
+    for (i, s) in scene.springs.iter().enumerate() {
+        let at = format!("springs[{i}]");
+        for (end, idx) in [("a", s.a), ("b", s.b)] {
+            if idx >= n_particles {
+                p.push(format!(
+                    "{at}: {end} = {idx} is out of range (the scene has {n_particles} particles, \
+                     indices 0..{})",
+                    n_particles.saturating_sub(1)
+                ));
+            }
+        }
+        if s.a == s.b {
+            p.push(format!(
+                "{at}: a and b are both {}: a spring joins two different particles",
+                s.a
+            ));
+        }
+        check_stiffness(&mut p, &at, s.stiffness);
+        if !(s.rest.is_finite() && s.rest >= 0.0) {
+            p.push(format!("{at}: rest must be finite and >= 0, got {}", s.rest));
+        }
+    }
+    if !p.list.is_empty() {
+        return Err(p.finish());
+    }
+    Ok(scene.expand())
+}
+
+fn available_integrators() -> String {
+    Integrator::available()
+        .map(|i| format!("{i:?}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn check_mass(p: &mut Problems, at: &str, mass: f64) {
+    if !(mass.is_finite() && mass > 0.0) {
+        p.push(format!("{at}: mass must be finite and > 0, got {mass}"));
+    }
+}
+
+fn check_stiffness(p: &mut Problems, at: &str, k: f64) {
+    if !(k.is_finite() && k >= 0.0) {
+        p.push(format!("{at}: stiffness must be finite and >= 0, got {k}"));
+    }
+}
+
+#[derive(Default)]
+struct Problems {
+    list: Vec<String>,
+    more: usize,
+}
+
+impl Problems {
+    fn push(&mut self, s: String) {
+        if self.list.len() < MAX_LISTED {
+            self.list.push(s);
+        } else {
+            self.more += 1;
+        }
+    }
+
+    fn finish(mut self) -> Vec<String> {
+        if self.more > 0 {
+            self.list.push(format!("... and {} more problems", self.more));
+        }
+        self.list
+    }
+}

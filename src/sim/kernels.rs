@@ -1,0 +1,70 @@
+//! The step's kernels: plain loops over the solver's dense arrays, free of Bevy.
+//!
+//! Each function is one pass of the step (see the README's step semantics); the systems in
+//! [`crate::sim::schedule`] call them in order.
+
+use super::solver::PackedSpring;
+use bevy::math::DVec2;
+
+/// Springs shorter than this exert no force: their direction is undefined.
+pub const MIN_SPRING_LENGTH: f64 = 1e-12;
+
+/// f = m g: starts the force accumulation.
+pub fn apply_gravity(f: &mut [DVec2], mass: &[f64], gravity: DVec2) {
+    for (f, &m) in f.iter_mut().zip(mass) {
+        *f = gravity * m;
+    }
+}
+
+/// f_a += -k (l - L) d / l and f_b -= the same, with d = x_a - x_b and l = |d|; each spring is
+/// evaluated once. A spring of (near) zero length is skipped.
+pub fn accumulate_spring_forces(f: &mut [DVec2], x: &[DVec2], springs: &[PackedSpring]) {
+    for s in springs {
+        let (a, b) = (s.a as usize, s.b as usize);
+        let d = x[a] - x[b];
+        let l = d.length();
+        if l < MIN_SPRING_LENGTH {
+            continue;
+        }
+        let fa = d * (-s.k * (l - s.rest) / l);
+        f[a] += fa;
+        f[b] -= fa;
+    }
+}
+
+/// v += dt f / m. Pinned particles have inverse mass 0 and stay at rest.
+pub fn kick(v: &mut [DVec2], f: &[DVec2], inv_mass: &[f64], dt: f64) {
+    for ((v, f), &w) in v.iter_mut().zip(f).zip(inv_mass) {
+        *v += *f * dt * w;
+    }
+}
+
+/// v *= exp(-μ dt).
+pub fn damp(v: &mut [DVec2], damping: f64, dt: f64) {
+    let decay = (-damping * dt).exp();
+    for v in v {
+        *v *= decay;
+    }
+}
+
+/// Ground contact on the start-of-step position: a free particle below the ground is put on it
+/// and its vertical velocity is zeroed.
+pub fn ground_contact(x: &mut [DVec2], v: &mut [DVec2], inv_mass: &[f64], ground: f64) {
+    for ((x, v), &w) in x.iter_mut().zip(v).zip(inv_mass) {
+        if x.y < ground && w != 0.0 {
+            x.y = ground;
+            v.y = 0.0;
+        }
+    }
+}
+
+/// x += dt u for the given drift velocities. Returns whether every resulting position and
+/// every velocity is finite (folded into the same pass, so blow-up detection is almost free).
+pub fn advance(x: &mut [DVec2], drift: &[DVec2], v: &[DVec2], dt: f64) -> bool {
+    let mut finite = true;
+    for ((x, u), v) in x.iter_mut().zip(drift).zip(v) {
+        *x += *u * dt;
+        finite &= x.is_finite() & v.is_finite();
+    }
+    finite
+}

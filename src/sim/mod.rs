@@ -1,0 +1,13 @@
+//! The simulation: data model, parameters, packed solver, kernels and schedule.
+
+pub mod components;
+pub mod kernels;
+pub mod params;
+pub mod schedule;
+pub mod solver;
+pub mod sync;
+
+pub use components::*;
+pub use params::*;
+pub use schedule::{PhysicsSet, PhysicsStep, SimPlugin, StepBudget, StepSet, TickPlan, advance, pack};
+pub use solver::{Energy, PackedSpring, Solver};

@@ -1,0 +1,130 @@
+//! Simulation parameters, clock and status: the resources a user or a test turns and reads.
+
+use bevy::math::DVec2;
+use bevy::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// The time integrators. Every one is followed by the same damping and ground passes
+/// (see the README's step semantics).
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize, clap::ValueEnum,
+)]
+pub enum Integrator {
+    /// x uses the velocity at the start of the step.
+    ExplicitEuler,
+    /// x uses the velocity at the end of the step (symplectic; the assignment's default).
+    #[default]
+    SymplecticEuler,
+    /// Kick-drift-kick velocity Verlet (symplectic, second order).
+    VelocityVerlet,
+    /// Classic four-stage Runge-Kutta on x'' = f(x)/m (fourth order, not symplectic).
+    Rk4,
+    /// Backward Euler, one Newton step solved by conjugate gradients (first order, dissipative).
+    ImplicitEuler,
+}
+
+impl Integrator {
+    pub const ALL: [Integrator; 5] = [
+        Integrator::ExplicitEuler,
+        Integrator::SymplecticEuler,
+        Integrator::VelocityVerlet,
+        Integrator::Rk4,
+        Integrator::ImplicitEuler,
+    ];
+
+    /// The name used on the command line and in reports (`symplectic-euler`, `rk4`, ...).
+    pub fn cli_name(self) -> &'static str {
+        match self {
+            Integrator::ExplicitEuler => "explicit-euler",
+            Integrator::SymplecticEuler => "symplectic-euler",
+            Integrator::VelocityVerlet => "velocity-verlet",
+            Integrator::Rk4 => "rk4",
+            Integrator::ImplicitEuler => "implicit-euler",
+        }
+    }
+
+    /// Integrators that are implemented in this build.
+    pub fn is_available(self) -> bool {
+        matches!(
+            self,
+            Integrator::ExplicitEuler | Integrator::SymplecticEuler
+        )
+    }
+
+    /// The available integrators, in menu order.
+    pub fn available() -> impl Iterator<Item = Integrator> {
+        Self::ALL.into_iter().filter(|i| i.is_available())
+    }
+}
+
+impl std::fmt::Display for Integrator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.cli_name())
+    }
+}
+
+/// What the simulation does each step. Defaults are the assignment's.
+#[derive(Resource, Debug, Clone, PartialEq)]
+pub struct SimParams {
+    /// Gravitational acceleration, m/s².
+    pub gravity: DVec2,
+    /// Velocity damping rate μ, 1/s: each step multiplies velocities by exp(-μ dt). 0 = off.
+    pub damping: f64,
+    /// Height of the ground; `None` = no ground.
+    pub ground: Option<f64>,
+    pub integrator: Integrator,
+    /// Time step, s.
+    pub dt: f64,
+    pub paused: bool,
+    /// While set, every spring uses this stiffness instead of its own (the stiffness slider and
+    /// `--stiffness`). Clearing it restores each spring's own stiffness.
+    pub stiffness_override: Option<f64>,
+}
+
+impl Default for SimParams {
+    fn default() -> Self {
+        SimParams {
+            gravity: DVec2::new(0.0, -9.8),
+            damping: 10.0,
+            ground: Some(0.0),
+            integrator: Integrator::SymplecticEuler,
+            dt: 1e-4,
+            paused: false,
+            stiffness_override: None,
+        }
+    }
+}
+
+/// The assignment's spring stiffness, N/m.
+pub const DEFAULT_STIFFNESS: f64 = 1e4;
+/// The assignment's particle mass, kg.
+pub const DEFAULT_MASS: f64 = 1.0;
+
+/// Simulated time and the number of steps taken since the scene was loaded.
+#[derive(Resource, Debug, Clone, Copy, Default, PartialEq)]
+pub struct SimClock {
+    pub steps: u64,
+    pub time: f64,
+}
+
+/// Whether the simulation is healthy.
+#[derive(Resource, Debug, Clone, Copy, Default, PartialEq)]
+pub enum SimStatus {
+    #[default]
+    Running,
+    /// A step produced a non-finite position or velocity. The simulation paused itself;
+    /// `step` is the 1-based number of the step that did it.
+    BlewUp { step: u64, time: f64 },
+}
+
+/// How many times each pass has run since the scene was loaded: shows which systems a scene
+/// needs, and proves that the others do not run.
+#[derive(Resource, Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct PassCounts {
+    pub gravity: u64,
+    pub springs: u64,
+    pub integrate: u64,
+    pub damping: u64,
+    pub ground: u64,
+    pub advance: u64,
+}

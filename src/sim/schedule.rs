@@ -1,0 +1,303 @@
+//! When the simulation runs: the fixed-tick sets, the per-step schedule and its ordered sets.
+//!
+//! At the assignment's dt = 1e-4 s the simulation needs 10 000 steps per simulated second, far
+//! more than frames. So, as avian runs its substeps, one fixed tick ([`PhysicsSet::Step`])
+//! runs the [`PhysicsStep`] schedule [`TickPlan::steps_per_tick`] times in a tight loop with a
+//! single-threaded executor; the ECS sync happens once per tick, not per step.
+
+use super::kernels;
+use super::params::*;
+use super::solver::Solver;
+use super::sync::{sync_from_solver, sync_into_solver};
+use bevy::app::{FixedMain, RunFixedMainLoop, RunFixedMainLoopSystems};
+use bevy::ecs::schedule::{ScheduleLabel, SingleThreadedExecutor};
+use bevy::prelude::*;
+use bevy::time::Fixed;
+use std::time::{Duration, Instant};
+
+/// The sets of a fixed tick, in `FixedUpdate`, in this order.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PhysicsSet {
+    /// Bring ECS edits into the solver.
+    Prepare,
+    /// Run this tick's steps.
+    Step,
+    /// Write results back into the components.
+    Writeback,
+}
+
+/// One step of size dt. Its sets run in this order.
+#[derive(ScheduleLabel, Debug, Clone, PartialEq, Eq, Hash)]
+pub struct PhysicsStep;
+
+/// The passes of one step, in [`PhysicsStep`], in this order.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum StepSet {
+    /// f = m g + Σ spring forces at the start-of-step positions.
+    Forces,
+    /// The integrator's velocity update (and what it needs for the position update).
+    Integrate,
+    /// v *= exp(-μ dt).
+    Damping,
+    /// Ground contact on the start-of-step position.
+    Ground,
+    /// The position update, x += dt u, with u the integrator's drift velocity; checks finiteness.
+    Advance,
+}
+
+/// How many steps one fixed tick runs.
+#[derive(Resource, Debug, Clone, Copy, PartialEq)]
+pub struct TickPlan {
+    pub steps_per_tick: u32,
+    /// The simulated time a tick should cover in the app; `steps_per_tick` follows from it and dt.
+    pub target_tick_seconds: f64,
+}
+
+impl Default for TickPlan {
+    fn default() -> Self {
+        TickPlan {
+            steps_per_tick: 1,
+            target_tick_seconds: 1.0 / 120.0,
+        }
+    }
+}
+
+/// The wall-clock time fixed ticks may take in one frame. Past it the remaining simulated time
+/// of the frame is dropped: the simulation slows down instead of the window freezing.
+#[derive(Resource, Debug, Clone, Copy)]
+pub struct StepBudget {
+    pub per_frame: Duration,
+    frame_start: Option<Instant>,
+    /// Simulated seconds dropped so far because the budget ran out.
+    pub dropped_seconds: f64,
+}
+
+impl Default for StepBudget {
+    fn default() -> Self {
+        StepBudget {
+            per_frame: Duration::from_millis(25),
+            frame_start: None,
+            dropped_seconds: 0.0,
+        }
+    }
+}
+
+/// The headless simulation: components, solver, fixed-tick systems. No window, no rendering.
+pub struct SimPlugin;
+
+impl Plugin for SimPlugin {
+    fn build(&self, app: &mut App) {
+        app.init_resource::<SimParams>()
+            .init_resource::<SimClock>()
+            .init_resource::<SimStatus>()
+            .init_resource::<PassCounts>()
+            .init_resource::<Solver>()
+            .init_resource::<TickPlan>()
+            .init_resource::<StepBudget>()
+            .init_resource::<super::components::Serials>();
+
+        app.configure_sets(
+            FixedUpdate,
+            (PhysicsSet::Prepare, PhysicsSet::Step, PhysicsSet::Writeback).chain(),
+        )
+        .add_systems(
+            FixedUpdate,
+            (
+                sync_into_solver.in_set(PhysicsSet::Prepare),
+                run_steps.in_set(PhysicsSet::Step).run_if(simulation_running),
+                sync_from_solver.in_set(PhysicsSet::Writeback),
+                enforce_step_budget.after(PhysicsSet::Writeback),
+            ),
+        )
+        .add_systems(
+            RunFixedMainLoop,
+            plan_tick.in_set(RunFixedMainLoopSystems::BeforeFixedMainLoop),
+        );
+
+        app.init_schedule(PhysicsStep);
+        app.edit_schedule(PhysicsStep, |schedule| {
+            schedule
+                .set_executor(SingleThreadedExecutor::default())
+                .configure_sets(
+                    (
+                        StepSet::Forces,
+                        StepSet::Integrate,
+                        StepSet::Damping,
+                        StepSet::Ground,
+                        StepSet::Advance,
+                    )
+                        .chain(),
+                )
+                .add_systems((
+                    (
+                        apply_gravity,
+                        accumulate_spring_forces.run_if(scene_has_springs),
+                    )
+                        .chain()
+                        .in_set(StepSet::Forces),
+                    integrate_velocity.in_set(StepSet::Integrate),
+                    damp_velocity
+                        .run_if(damping_enabled)
+                        .in_set(StepSet::Damping),
+                    ground_contact.run_if(ground_enabled).in_set(StepSet::Ground),
+                    advance_positions.in_set(StepSet::Advance),
+                ));
+        });
+    }
+}
+
+// ---- run conditions: a pass whose feature the scene does not use does not run ----
+
+pub fn simulation_running(params: Res<SimParams>, status: Res<SimStatus>) -> bool {
+    !params.paused && *status == SimStatus::Running
+}
+
+pub fn scene_has_springs(solver: Res<Solver>) -> bool {
+    !solver.springs.is_empty()
+}
+
+pub fn damping_enabled(params: Res<SimParams>) -> bool {
+    params.damping != 0.0
+}
+
+pub fn ground_enabled(params: Res<SimParams>) -> bool {
+    params.ground.is_some()
+}
+
+// ---- the passes ----
+
+fn apply_gravity(mut solver: ResMut<Solver>, params: Res<SimParams>, mut n: ResMut<PassCounts>) {
+    let s = &mut *solver;
+    kernels::apply_gravity(&mut s.f, &s.mass, params.gravity);
+    n.gravity += 1;
+}
+
+fn accumulate_spring_forces(mut solver: ResMut<Solver>, mut n: ResMut<PassCounts>) {
+    let s = &mut *solver;
+    kernels::accumulate_spring_forces(&mut s.f, &s.x, &s.springs);
+    n.springs += 1;
+}
+
+fn integrate_velocity(
+    mut solver: ResMut<Solver>,
+    params: Res<SimParams>,
+    mut n: ResMut<PassCounts>,
+) {
+    let s = &mut *solver;
+    if params.integrator == Integrator::ExplicitEuler {
+        s.drift.copy_from_slice(&s.v);
+    }
+    kernels::kick(&mut s.v, &s.f, &s.inv_mass, params.dt);
+    n.integrate += 1;
+}
+
+fn damp_velocity(mut solver: ResMut<Solver>, params: Res<SimParams>, mut n: ResMut<PassCounts>) {
+    kernels::damp(&mut solver.v, params.damping, params.dt);
+    n.damping += 1;
+}
+
+fn ground_contact(mut solver: ResMut<Solver>, params: Res<SimParams>, mut n: ResMut<PassCounts>) {
+    let Some(ground) = params.ground else { return };
+    let s = &mut *solver;
+    kernels::ground_contact(&mut s.x, &mut s.v, &s.inv_mass, ground);
+    n.ground += 1;
+}
+
+fn advance_positions(
+    mut solver: ResMut<Solver>,
+    params: Res<SimParams>,
+    mut n: ResMut<PassCounts>,
+) {
+    let s = &mut *solver;
+    let drift = match params.integrator {
+        Integrator::ExplicitEuler => &s.drift,
+        _ => &s.v,
+    };
+    let finite = kernels::advance(&mut s.x, drift, &s.v, params.dt);
+    s.non_finite = !finite;
+    n.advance += 1;
+}
+
+/// Runs this tick's steps; stops at the first step that produced a non-finite value.
+fn run_steps(world: &mut World) {
+    let steps = world.resource::<TickPlan>().steps_per_tick;
+    world.schedule_scope(PhysicsStep, |world, schedule| {
+        for _ in 0..steps {
+            schedule.run(world);
+            let dt = world.resource::<SimParams>().dt;
+            let mut clock = world.resource_mut::<SimClock>();
+            clock.steps += 1;
+            clock.time += dt;
+            let clock = *clock;
+            if world.resource::<Solver>().non_finite {
+                *world.resource_mut::<SimStatus>() = SimStatus::BlewUp {
+                    step: clock.steps,
+                    time: clock.time,
+                };
+                world.resource_mut::<SimParams>().paused = true;
+                break;
+            }
+        }
+    });
+}
+
+/// Sizes the fixed tick from dt, before the fixed loop of each frame.
+fn plan_tick(
+    params: Res<SimParams>,
+    mut plan: ResMut<TickPlan>,
+    mut time: ResMut<Time<Fixed>>,
+    mut budget: ResMut<StepBudget>,
+) {
+    budget.frame_start = Some(Instant::now());
+    let steps = (plan.target_tick_seconds / params.dt).round().clamp(1.0, 1e6) as u32;
+    if plan.steps_per_tick != steps {
+        plan.steps_per_tick = steps;
+    }
+    let tick = Duration::from_secs_f64(params.dt * steps as f64);
+    if time.timestep() != tick {
+        time.set_timestep(tick);
+    }
+}
+
+/// Drops the rest of the frame's simulated time once the frame's budget is spent.
+fn enforce_step_budget(mut budget: ResMut<StepBudget>, mut time: ResMut<Time<Fixed>>) {
+    let Some(start) = budget.frame_start else {
+        return;
+    };
+    if start.elapsed() > budget.per_frame {
+        let overstep = time.overstep();
+        if overstep > Duration::ZERO {
+            budget.dropped_seconds += overstep.as_secs_f64();
+            time.discard_overstep(overstep);
+        }
+    }
+}
+
+/// Runs `steps` steps of the simulation directly, through the same fixed-tick systems the app
+/// runs (sync, step sets, writeback), for headless use: the CLI, benchmarks, tests.
+/// Returns the number of steps taken: fewer when paused or when a step blew up.
+pub fn advance(world: &mut World, steps: u64) -> u64 {
+    const MAX_STEPS_PER_TICK: u64 = 10_000;
+    let start = world.resource::<SimClock>().steps;
+    let mut remaining = steps;
+    while remaining > 0 {
+        let n = remaining.min(MAX_STEPS_PER_TICK);
+        world.resource_mut::<TickPlan>().steps_per_tick = n as u32;
+        world.run_schedule(FixedMain);
+        let taken = world.resource::<SimClock>().steps - start;
+        if taken < steps - remaining + n {
+            break;
+        }
+        remaining -= n;
+    }
+    world.resource::<SimClock>().steps - start
+}
+
+/// Brings the world's particles and springs into the solver now, without stepping (the same
+/// sync the first tick would run), so that its state can be read before the first step.
+/// Fails only when the world lacks the [`SimPlugin`] resources.
+pub fn pack(world: &mut World) -> Result<(), String> {
+    world
+        .run_system_cached(sync_into_solver)
+        .map_err(|e| format!("cannot pack the solver: {e}"))
+}

@@ -1,0 +1,186 @@
+//! Keeps the packed [`Solver`] in step with the ECS components.
+//!
+//! * Structural changes (a particle or spring added or removed, a particle pinned or unpinned)
+//!   rebuild the packed arrays, ordered by creation serial so results do not depend on
+//!   archetype layout.
+//! * Value edits (a dragged position, a changed mass or spring) are patched in place.
+//! * After the steps, positions, velocities and forces are written back without flagging them
+//!   as changed, so the next sync sees only what users changed.
+
+use super::components::*;
+use super::params::SimParams;
+use super::solver::{PackedSpring, Solver};
+use bevy::ecs::entity::EntityHashMap;
+use bevy::ecs::system::SystemParam;
+use bevy::math::DVec2;
+use bevy::prelude::*;
+
+/// Signals that the set of particles or springs changed since the last sync.
+#[derive(SystemParam)]
+pub struct StructureChanges<'w, 's> {
+    added_particles: Query<'w, 's, (), Added<Particle>>,
+    added_springs: Query<'w, 's, (), Added<Spring>>,
+    added_pins: Query<'w, 's, (), Added<Pinned>>,
+    removed_particles: RemovedComponents<'w, 's, Particle>,
+    removed_springs: RemovedComponents<'w, 's, Spring>,
+    removed_pins: RemovedComponents<'w, 's, Pinned>,
+}
+
+impl StructureChanges<'_, '_> {
+    fn any(&mut self) -> bool {
+        // Drain every reader so that old removals are not seen again.
+        let removed = self.removed_particles.read().count()
+            + self.removed_springs.read().count()
+            + self.removed_pins.read().count();
+        removed > 0
+            || !self.added_particles.is_empty()
+            || !self.added_springs.is_empty()
+            || !self.added_pins.is_empty()
+    }
+}
+
+type ParticleData<'a> = (
+    Entity,
+    &'a Particle,
+    Ref<'a, Position>,
+    Ref<'a, Velocity>,
+    Ref<'a, Mass>,
+    Has<Pinned>,
+    &'a mut SolverIndex,
+);
+type Particles<'w, 's> = Query<'w, 's, ParticleData<'static>, Without<Spring>>;
+type Springs<'w, 's> = Query<'w, 's, (Entity, Ref<'static, Spring>, &'static mut SolverIndex), Without<Particle>>;
+
+/// Brings ECS edits into the solver. Runs at the start of every fixed tick.
+pub fn sync_into_solver(
+    mut solver: ResMut<Solver>,
+    params: Res<SimParams>,
+    mut structure: StructureChanges,
+    mut particles: Particles,
+    mut springs: Springs,
+) {
+    if structure.any() {
+        rebuild(&mut solver, &mut particles, &mut springs);
+        solver.apply_stiffness_override(params.stiffness_override);
+        return;
+    }
+    for (_, _, pos, vel, mass, pinned, index) in &particles {
+        let i = index.0 as usize;
+        if pos.is_changed() {
+            solver.x[i] = pos.0;
+        }
+        if vel.is_changed() {
+            solver.v[i] = if pinned { DVec2::ZERO } else { vel.0 };
+        }
+        if mass.is_changed() {
+            solver.mass[i] = mass.0;
+            solver.inv_mass[i] = if pinned { 0.0 } else { 1.0 / mass.0 };
+        }
+    }
+    let mut springs_changed = false;
+    let mut endpoints_changed = false;
+    for (_, spring, index) in &springs {
+        if !spring.is_changed() {
+            continue;
+        }
+        springs_changed = true;
+        if index.0 == u32::MAX {
+            // Not packed (an endpoint was missing at the last rebuild): repack.
+            endpoints_changed = true;
+            continue;
+        }
+        let endpoint = |e: Entity| particles.get(e).ok().map(|p| p.6.0);
+        let si = index.0 as usize;
+        let packed = &mut solver.springs[si];
+        if endpoint(spring.a) != Some(packed.a) || endpoint(spring.b) != Some(packed.b) {
+            endpoints_changed = true;
+        }
+        packed.rest = spring.rest;
+        solver.own_stiffness[si] = spring.stiffness;
+    }
+    if endpoints_changed {
+        rebuild(&mut solver, &mut particles, &mut springs);
+    }
+    if springs_changed || solver.applied_override != params.stiffness_override {
+        solver.apply_stiffness_override(params.stiffness_override);
+    }
+}
+
+/// Repacks every particle and spring, in creation order. Springs whose endpoints are not both
+/// particles are left out.
+fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &mut Springs) {
+    let mut order: Vec<(u64, Entity)> = particles.iter().map(|p| (p.1.serial, p.0)).collect();
+    order.sort_unstable();
+    let n = order.len();
+    let mut index: EntityHashMap<u32> = EntityHashMap::default();
+    index.reserve(n);
+    let mut entities = Vec::with_capacity(n);
+    for (i, &(_, e)) in order.iter().enumerate() {
+        index.insert(e, i as u32);
+        entities.push(e);
+    }
+    let (mut x, mut v, mut mass, mut inv_mass) = (
+        vec![DVec2::ZERO; n],
+        vec![DVec2::ZERO; n],
+        vec![1.0; n],
+        vec![1.0; n],
+    );
+    for (e, _, pos, vel, m, pinned, mut solver_index) in particles.iter_mut() {
+        let i = index[&e] as usize;
+        solver_index.0 = i as u32;
+        x[i] = pos.0;
+        v[i] = if pinned { DVec2::ZERO } else { vel.0 };
+        mass[i] = m.0;
+        inv_mass[i] = if pinned { 0.0 } else { 1.0 / m.0 };
+    }
+
+    let mut packed: Vec<(u64, Entity, PackedSpring)> = springs
+        .iter()
+        .filter_map(|(e, s, _)| {
+            let (a, b) = (*index.get(&s.a)?, *index.get(&s.b)?);
+            let spring = PackedSpring {
+                a,
+                b,
+                rest: s.rest,
+                k: s.stiffness,
+            };
+            Some((s.serial, e, spring))
+        })
+        .collect();
+    packed.sort_unstable_by_key(|p| p.0);
+    let mut spring_index: EntityHashMap<u32> = EntityHashMap::default();
+    spring_index.extend(packed.iter().enumerate().map(|(i, p)| (p.1, i as u32)));
+    for (e, _, mut solver_index) in springs.iter_mut() {
+        solver_index.0 = spring_index.get(&e).copied().unwrap_or(u32::MAX);
+    }
+
+    *solver = Solver {
+        entities,
+        f: vec![DVec2::ZERO; n],
+        drift: v.clone(),
+        x,
+        v,
+        mass,
+        inv_mass,
+        spring_entities: packed.iter().map(|p| p.1).collect(),
+        own_stiffness: packed.iter().map(|p| p.2.k).collect(),
+        springs: packed.into_iter().map(|p| p.2).collect(),
+        applied_override: None,
+        non_finite: false,
+    };
+}
+
+/// Writes the solver's results back into the components, without flagging them as changed.
+pub fn sync_from_solver(
+    solver: Res<Solver>,
+    mut particles: Query<(&SolverIndex, &mut Position, &mut Velocity, &mut Force), With<Particle>>,
+) {
+    for (index, mut pos, mut vel, mut force) in &mut particles {
+        let i = index.0 as usize;
+        if i < solver.x.len() {
+            pos.bypass_change_detection().0 = solver.x[i];
+            vel.bypass_change_detection().0 = solver.v[i];
+            force.bypass_change_detection().0 = solver.f[i];
+        }
+    }
+}

@@ -1,0 +1,146 @@
+//! The `hooke run` command end to end: reports, CSV output, exit codes, bad input.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn hooke(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_hooke"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("the hooke binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn json(o: &Output) -> serde_json::Value {
+    serde_json::from_slice(&o.stdout).unwrap_or_else(|e| {
+        panic!("stdout is not one JSON object ({e}): {}", String::from_utf8_lossy(&o.stdout))
+    })
+}
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("hooke-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+/// Exit code 2, no panic, and a message on stderr that contains `needle`.
+fn assert_bad_input(o: &Output, needle: &str) {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(err.contains(needle), "expected {needle:?} in: {err}");
+}
+
+#[test]
+fn run_reports_json_and_writes_a_round_tripping_csv() {
+    let csv = temp("cloth.csv");
+    let o = hooke(&[
+        "run", "--scene", "assets/scenes/cloth32.ron", "--steps", "1000", "--json", "--out",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r = json(&o);
+    for key in [
+        "integrator", "dt", "steps", "particles", "springs", "wall_s", "steps_per_s",
+        "spring_updates_per_s", "energy_start", "energy_end", "finite",
+    ] {
+        assert!(r.get(key).is_some(), "missing {key} in {r}");
+    }
+    assert_eq!(r["integrator"], "symplectic-euler");
+    assert_eq!((r["steps"].as_u64(), r["particles"].as_u64()), (Some(1000), Some(1024)));
+    assert_eq!(r["springs"], 3906);
+    assert_eq!(r["finite"], true);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("id,x,y,vx,vy"));
+    let sum: f64 = lines
+        .map(|l| {
+            let f: Vec<f64> = l.split(',').map(|v| v.parse().unwrap()).collect();
+            f[1] + f[2]
+        })
+        .sum();
+    // The reference Σ(x+y) (shared/reference.md), read back from the printed CSV.
+    assert!((sum - 998.4039018283542).abs() < 1e-9, "{sum}");
+}
+
+#[test]
+fn time_and_overrides() {
+    let o = hooke(&[
+        "run", "--scene", "rope", "--time", "0.05", "--dt", "2e-4", "--integrator",
+        "explicit-euler", "--damping", "0", "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r = json(&o);
+    assert_eq!(r["steps"], 250);
+    assert_eq!(r["dt"], 2e-4);
+    assert_eq!(r["integrator"], "explicit-euler");
+
+    // --stiffness replaces every spring's stiffness: the sagging rope ends elsewhere.
+    let soft = json(&hooke(&["run", "--scene", "rope", "--steps", "100", "--json"]));
+    let stiff = json(&hooke(&[
+        "run", "--scene", "rope", "--steps", "100", "--json", "--stiffness", "1e6",
+    ]));
+    assert_ne!(soft["energy_end"], stiff["energy_end"]);
+}
+
+#[test]
+fn a_blow_up_stops_the_run_with_exit_code_3() {
+    let o = hooke(&[
+        "run", "--scene", "cloth32", "--integrator", "explicit-euler", "--damping", "0",
+        "--stiffness", "1e9", "--dt", "1e-3", "--steps", "5000", "--json",
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("panicked"));
+    let r = json(&o);
+    assert_eq!(r["finite"], false);
+    let step = r["blowup_step"].as_u64().expect("names the step");
+    assert!(step > 1 && step < 5000, "{step}");
+    assert_eq!(r["steps_taken"].as_u64(), Some(step));
+}
+
+#[test]
+fn bad_scene_files() {
+    assert_bad_input(&hooke(&["run", "--scene", "no/such.ron"]), "no/such.ron");
+
+    let broken = temp("broken.ron");
+    std::fs::write(&broken, "(\n    gravity: (0.0, -9.8),\n    damping: oops,\n)").unwrap();
+    assert_bad_input(
+        &hooke(&["run", "--scene", broken.to_str().unwrap()]),
+        &format!("{}:3:", broken.display()),
+    );
+
+    let invalid = temp("invalid.ron");
+    std::fs::write(
+        &invalid,
+        "(gravity: (0.0, -9.8), damping: 1.0, ground: None, integrator: SymplecticEuler, \
+         dt: 0.001, particles: [(pos: (0.0, 0.0), mass: -1.0)], \
+         springs: [(a: 0, b: 3, stiffness: 1.0, rest: 0.1)])",
+    )
+    .unwrap();
+    let o = hooke(&["run", "--scene", invalid.to_str().unwrap()]);
+    assert_bad_input(&o, "particles[0]: mass must be finite and > 0");
+    assert!(stderr(&o).contains("springs[0]: b = 3 is out of range"));
+}
+
+#[test]
+fn bad_flags() {
+    let cases: [(&[&str], &str); 8] = [
+        (&["--dt", "-1"], "--dt must be finite and > 0"),
+        (&["--dt", "NaN"], "--dt must be finite and > 0"),
+        (&["--stiffness", "-3"], "--stiffness must be finite and >= 0"),
+        (&["--damping", "inf"], "--damping must be finite and >= 0"),
+        (&["--time", "-1"], "--time must be finite and >= 0"),
+        (&["--integrator", "leapfrog"], "leapfrog"),
+        (&["--steps", "ten"], "ten"),
+        (&["--steps", "5", "--time", "1"], "cannot be used with"),
+    ];
+    for (flags, needle) in cases {
+        let mut args = vec!["run", "--scene", "rope"];
+        args.extend_from_slice(flags);
+        assert_bad_input(&hooke(&args), needle);
+    }
+}

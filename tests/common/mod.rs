@@ -1,0 +1,70 @@
+//! Helpers shared by the headless tests.
+#![allow(dead_code)]
+
+use bevy::math::DVec2;
+use bevy::prelude::*;
+use hooke::scene::{LoadedScene, ParticleDef, Scene, SpringDef, load_into_world};
+use hooke::sim::{self, Integrator, Solver};
+
+/// A scene with no gravity, damping or ground: pure springs.
+pub fn bare_scene(integrator: Integrator, dt: f64) -> Scene {
+    Scene {
+        gravity: (0.0, 0.0),
+        damping: 0.0,
+        ground: None,
+        integrator,
+        dt,
+        ..Default::default()
+    }
+}
+
+pub fn particle(x: f64, y: f64, pinned: bool) -> ParticleDef {
+    ParticleDef {
+        pos: (x, y),
+        vel: (0.0, 0.0),
+        mass: 1.0,
+        pinned,
+    }
+}
+
+pub fn spring(a: usize, b: usize, stiffness: f64, rest: f64) -> SpringDef {
+    SpringDef {
+        a,
+        b,
+        stiffness,
+        rest,
+    }
+}
+
+/// A headless app (MinimalPlugins + SimPlugin) with the scene loaded and running.
+pub fn app_with(scene: Scene) -> App {
+    let loaded = LoadedScene::from_scene(scene, None).expect("test scene is valid");
+    let mut app = hooke::headless_app();
+    load_into_world(app.world_mut(), &loaded);
+    app.world_mut().resource_mut::<sim::SimParams>().paused = false;
+    sim::pack(app.world_mut()).unwrap();
+    app
+}
+
+pub fn step(app: &mut App, steps: u64) {
+    let taken = sim::advance(app.world_mut(), steps);
+    assert_eq!(taken, steps, "the simulation stopped early");
+}
+
+pub fn solver(app: &App) -> &Solver {
+    app.world().resource::<Solver>()
+}
+
+pub fn pos(app: &App, i: usize) -> DVec2 {
+    solver(app).x[i]
+}
+
+pub fn vel(app: &App, i: usize) -> DVec2 {
+    solver(app).v[i]
+}
+
+/// The workspace's `shared/` folder (beside the project root), if present.
+pub fn shared_dir() -> Option<std::path::PathBuf> {
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared");
+    p.is_dir().then_some(p)
+}

@@ -1,0 +1,74 @@
+//! The schedule: systems for unused features do not run, and the app's fixed-timestep loop
+//! steps the simulation like the direct headless stepping does.
+
+mod common;
+use common::*;
+use hooke::scene::presets;
+use hooke::sim::{Integrator, PassCounts, SimClock, SimParams};
+use std::time::Duration;
+
+#[test]
+fn systems_for_unused_features_do_not_run() {
+    // No springs, no damping, no ground: only gravity, velocity and position updates run.
+    let mut scene = bare_scene(Integrator::SymplecticEuler, 1e-4);
+    scene.gravity = (0.0, -9.8);
+    scene.particles = vec![particle(0.5, 0.5, false)];
+    let mut app = app_with(scene);
+    step(&mut app, 250);
+    let n = *app.world().resource::<PassCounts>();
+    assert_eq!(
+        n,
+        PassCounts {
+            gravity: 250,
+            springs: 0,
+            integrate: 250,
+            damping: 0,
+            ground: 0,
+            advance: 250
+        }
+    );
+
+    // The cloth uses every feature: every pass runs every step.
+    let mut app = app_with(presets::resolve("cloth32").unwrap().scene);
+    step(&mut app, 40);
+    let n = *app.world().resource::<PassCounts>();
+    assert_eq!((n.springs, n.damping, n.ground, n.advance), (40, 40, 40, 40));
+
+    // Switching a feature off at run time stops its pass from the next step on.
+    app.world_mut().resource_mut::<SimParams>().damping = 0.0;
+    app.world_mut().resource_mut::<SimParams>().ground = None;
+    step(&mut app, 10);
+    let n = *app.world().resource::<PassCounts>();
+    assert_eq!((n.springs, n.damping, n.ground, n.advance), (50, 40, 40, 50));
+}
+
+#[test]
+fn paused_simulation_does_not_step() {
+    let mut app = app_with(presets::resolve("cloth32").unwrap().scene);
+    app.world_mut().resource_mut::<SimParams>().paused = true;
+    assert_eq!(hooke::sim::advance(app.world_mut(), 100), 0);
+    assert_eq!(app.world().resource::<SimClock>().steps, 0);
+}
+
+/// The app path: `app.update()` with a manual clock runs the fixed loop, which sizes its tick
+/// from dt and runs that many steps per tick. The result equals direct stepping.
+#[test]
+fn fixed_timestep_loop_matches_direct_stepping() {
+    let scene = presets::resolve("rope").unwrap().scene;
+    let mut driven = app_with(scene.clone());
+    driven.insert_resource(bevy::time::TimeUpdateStrategy::ManualDuration(
+        Duration::from_millis(10),
+    ));
+    for _ in 0..30 {
+        driven.update();
+    }
+    let steps = driven.world().resource::<SimClock>().steps;
+    // 30 frames of 10 ms at dt = 1e-4 s: about 3000 steps (the first frame has no delta).
+    assert!(
+        (2800..=3000).contains(&steps),
+        "{steps} steps after 0.3 s of frames"
+    );
+    let mut direct = app_with(scene);
+    step(&mut direct, steps);
+    assert_eq!(solver(&driven).x, solver(&direct).x);
+}
