@@ -36,9 +36,6 @@ impl Overrides {
         if let Some(mu) = self.damping.filter(|m| !(m.is_finite() && *m >= 0.0)) {
             return Err(format!("--damping must be finite and >= 0, got {mu}"));
         }
-        if let Some(i) = self.integrator.filter(|i| !i.is_available()) {
-            return Err(format!("--integrator {i} is not implemented in this build"));
-        }
         Ok(())
     }
 }

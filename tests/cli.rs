@@ -17,7 +17,10 @@ fn stderr(o: &Output) -> String {
 
 fn json(o: &Output) -> serde_json::Value {
     serde_json::from_slice(&o.stdout).unwrap_or_else(|e| {
-        panic!("stdout is not one JSON object ({e}): {}", String::from_utf8_lossy(&o.stdout))
+        panic!(
+            "stdout is not one JSON object ({e}): {}",
+            String::from_utf8_lossy(&o.stdout)
+        )
     })
 }
 
@@ -39,19 +42,37 @@ fn assert_bad_input(o: &Output, needle: &str) {
 fn run_reports_json_and_writes_a_round_tripping_csv() {
     let csv = temp("cloth.csv");
     let o = hooke(&[
-        "run", "--scene", "assets/scenes/cloth32.ron", "--steps", "1000", "--json", "--out",
+        "run",
+        "--scene",
+        "assets/scenes/cloth32.ron",
+        "--steps",
+        "1000",
+        "--json",
+        "--out",
         csv.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let r = json(&o);
     for key in [
-        "integrator", "dt", "steps", "particles", "springs", "wall_s", "steps_per_s",
-        "spring_updates_per_s", "energy_start", "energy_end", "finite",
+        "integrator",
+        "dt",
+        "steps",
+        "particles",
+        "springs",
+        "wall_s",
+        "steps_per_s",
+        "spring_updates_per_s",
+        "energy_start",
+        "energy_end",
+        "finite",
     ] {
         assert!(r.get(key).is_some(), "missing {key} in {r}");
     }
     assert_eq!(r["integrator"], "symplectic-euler");
-    assert_eq!((r["steps"].as_u64(), r["particles"].as_u64()), (Some(1000), Some(1024)));
+    assert_eq!(
+        (r["steps"].as_u64(), r["particles"].as_u64()),
+        (Some(1000), Some(1024))
+    );
     assert_eq!(r["springs"], 3906);
     assert_eq!(r["finite"], true);
     let text = std::fs::read_to_string(&csv).unwrap();
@@ -70,8 +91,18 @@ fn run_reports_json_and_writes_a_round_tripping_csv() {
 #[test]
 fn time_and_overrides() {
     let o = hooke(&[
-        "run", "--scene", "rope", "--time", "0.05", "--dt", "2e-4", "--integrator",
-        "explicit-euler", "--damping", "0", "--json",
+        "run",
+        "--scene",
+        "rope",
+        "--time",
+        "0.05",
+        "--dt",
+        "2e-4",
+        "--integrator",
+        "explicit-euler",
+        "--damping",
+        "0",
+        "--json",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let r = json(&o);
@@ -80,9 +111,18 @@ fn time_and_overrides() {
     assert_eq!(r["integrator"], "explicit-euler");
 
     // --stiffness replaces every spring's stiffness: the sagging rope ends elsewhere.
-    let soft = json(&hooke(&["run", "--scene", "rope", "--steps", "100", "--json"]));
+    let soft = json(&hooke(&[
+        "run", "--scene", "rope", "--steps", "100", "--json",
+    ]));
     let stiff = json(&hooke(&[
-        "run", "--scene", "rope", "--steps", "100", "--json", "--stiffness", "1e6",
+        "run",
+        "--scene",
+        "rope",
+        "--steps",
+        "100",
+        "--json",
+        "--stiffness",
+        "1e6",
     ]));
     assert_ne!(soft["energy_end"], stiff["energy_end"]);
 }
@@ -90,8 +130,20 @@ fn time_and_overrides() {
 #[test]
 fn a_blow_up_stops_the_run_with_exit_code_3() {
     let o = hooke(&[
-        "run", "--scene", "cloth32", "--integrator", "explicit-euler", "--damping", "0",
-        "--stiffness", "1e9", "--dt", "1e-3", "--steps", "5000", "--json",
+        "run",
+        "--scene",
+        "cloth32",
+        "--integrator",
+        "explicit-euler",
+        "--damping",
+        "0",
+        "--stiffness",
+        "1e9",
+        "--dt",
+        "1e-3",
+        "--steps",
+        "5000",
+        "--json",
     ]);
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     assert!(!stderr(&o).contains("panicked"));
@@ -107,7 +159,11 @@ fn bad_scene_files() {
     assert_bad_input(&hooke(&["run", "--scene", "no/such.ron"]), "no/such.ron");
 
     let broken = temp("broken.ron");
-    std::fs::write(&broken, "(\n    gravity: (0.0, -9.8),\n    damping: oops,\n)").unwrap();
+    std::fs::write(
+        &broken,
+        "(\n    gravity: (0.0, -9.8),\n    damping: oops,\n)",
+    )
+    .unwrap();
     assert_bad_input(
         &hooke(&["run", "--scene", broken.to_str().unwrap()]),
         &format!("{}:3:", broken.display()),
@@ -131,7 +187,10 @@ fn bad_flags() {
     let cases: [(&[&str], &str); 8] = [
         (&["--dt", "-1"], "--dt must be finite and > 0"),
         (&["--dt", "NaN"], "--dt must be finite and > 0"),
-        (&["--stiffness", "-3"], "--stiffness must be finite and >= 0"),
+        (
+            &["--stiffness", "-3"],
+            "--stiffness must be finite and >= 0",
+        ),
         (&["--damping", "inf"], "--damping must be finite and >= 0"),
         (&["--time", "-1"], "--time must be finite and >= 0"),
         (&["--integrator", "leapfrog"], "leapfrog"),

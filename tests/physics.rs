@@ -28,7 +28,10 @@ fn symplectic_euler_oscillates_like_the_exact_solution() {
     // Symplectic Euler: an O(hω) amplitude wobble plus a phase drift of t·ω·(hω)²/24.
     let h_omega = dt * omega;
     let bound = u0 * (h_omega + 1.0 * omega * h_omega * h_omega / 24.0);
-    assert!(max_err < bound, "max error {max_err:e} over 1 s, bound {bound:e}");
+    assert!(
+        max_err < bound,
+        "max error {max_err:e} over 1 s, bound {bound:e}"
+    );
     // And it is not trivially small: it does oscillate (10000 steps = 15.9 periods).
     assert!(pos(&app, 1).y == 0.5);
 }
@@ -47,7 +50,10 @@ fn explicit_euler_energy_grows_as_predicted() {
     let amplitude_ratio = (energy(&app) / e0).sqrt();
     let rel = (amplitude_ratio - growth).abs() / growth;
     assert!(growth > 2.5, "the test should see real growth ({growth})");
-    assert!(rel < 1e-9, "amplitude grew {amplitude_ratio}, predicted {growth}");
+    assert!(
+        rel < 1e-9,
+        "amplitude grew {amplitude_ratio}, predicted {growth}"
+    );
 }
 
 #[test]
@@ -89,11 +95,23 @@ fn ground_stops_a_falling_particle() {
     // between y = 0 and one gravity step below it, y = -g dt².
     let (y, vy) = (pos(&app, 0).y, vel(&app, 0).y);
     let sag = 9.8 * dt * dt;
-    assert!(y == 0.0 || (y + sag).abs() < 1e-15, "rests on the ground: y = {y:e}");
-    assert!(vy == 0.0 || (vy + 9.8 * dt).abs() < 1e-12, "at rest: vy = {vy:e}");
+    assert!(
+        y == 0.0 || (y + sag).abs() < 1e-15,
+        "rests on the ground: y = {y:e}"
+    );
+    assert!(
+        vy == 0.0 || (vy + 9.8 * dt).abs() < 1e-12,
+        "at rest: vy = {vy:e}"
+    );
     step(&mut app, 1);
-    assert!(pos(&app, 0).y == 0.0 || y == 0.0, "it is back on the ground every other step");
-    assert!(vel(&app, 0).x > 0.29, "slides on: the ground has no friction");
+    assert!(
+        pos(&app, 0).y == 0.0 || y == 0.0,
+        "it is back on the ground every other step"
+    );
+    assert!(
+        vel(&app, 0).x > 0.29,
+        "slides on: the ground has no friction"
+    );
 }
 
 #[test]
@@ -103,7 +121,10 @@ fn pinned_particles_never_move() {
     let before: Vec<DVec2> = solver(&app).x[..32].to_vec();
     // Even a velocity written into a pinned particle's component is ignored.
     let pinned_entity = solver(&app).entities[3];
-    app.world_mut().get_mut::<Velocity>(pinned_entity).unwrap().0 = DVec2::new(5.0, 5.0);
+    app.world_mut()
+        .get_mut::<Velocity>(pinned_entity)
+        .unwrap()
+        .0 = DVec2::new(5.0, 5.0);
     step(&mut app, 500);
     let s = solver(&app);
     for i in 0..32 {
@@ -122,7 +143,11 @@ fn zero_length_springs_exert_no_force() {
     scene.springs = vec![spring(0, 1, 1e4, 0.0), spring(0, 1, 1e4, 0.1)];
     let mut app = app_with(scene);
     step(&mut app, 1);
-    assert_eq!(solver(&app).f[1], DVec2::new(0.0, -9.8), "only gravity at zero length");
+    assert_eq!(
+        solver(&app).f[1],
+        DVec2::new(0.0, -9.8),
+        "only gravity at zero length"
+    );
     step(&mut app, 1000);
     assert!(solver(&app).state_is_finite());
 }
@@ -143,13 +168,17 @@ fn a_stiffness_change_through_the_resource_takes_effect_on_the_next_step() {
     let f = force_on_free(&mut app);
     assert!((f + 1e4 * stretch).abs() < 1e-6, "k = 1e4: f = {f}");
 
-    app.world_mut().resource_mut::<SimParams>().stiffness_override = Some(3e4);
+    app.world_mut()
+        .resource_mut::<SimParams>()
+        .stiffness_override = Some(3e4);
     let x = pos(&app, 1).x - 0.5;
     let f = force_on_free(&mut app);
     assert_eq!(f, -3e4 * x, "override 3e4 applies on the next step");
 
     // Clearing the override restores the spring's own stiffness...
-    app.world_mut().resource_mut::<SimParams>().stiffness_override = None;
+    app.world_mut()
+        .resource_mut::<SimParams>()
+        .stiffness_override = None;
     let x = pos(&app, 1).x - 0.5;
     assert_eq!(force_on_free(&mut app), -1e4 * x);
 

@@ -30,7 +30,10 @@ fn cloth32_checksums_match_the_reference() {
         assert_eq!((s.particle_count(), s.spring_count()), (1024, 3906));
         let sum: f64 = s.x.iter().map(|p| p.x + p.y).sum();
         let rel = (sum - expected).abs() / expected;
-        assert!(rel < 1e-12, "{integrator}: Σ(x+y) = {sum:?}, reference {expected:?}, rel {rel:e}");
+        assert!(
+            rel < 1e-12,
+            "{integrator}: Σ(x+y) = {sum:?}, reference {expected:?}, rel {rel:e}"
+        );
     }
 }
 
@@ -52,7 +55,10 @@ fn cloth32_positions_match_the_peer_state() {
             let f: Vec<f64> = line.split(',').map(|v| v.parse().unwrap()).collect();
             let i = f[0] as usize;
             let d = (s.x[i].x - f[1]).abs().max((s.x[i].y - f[2]).abs());
-            assert!(d < 1e-12, "{integrator}: particle {i} is {d:e} from the reference");
+            assert!(
+                d < 1e-12,
+                "{integrator}: particle {i} is {d:e} from the reference"
+            );
             rows += 1;
         }
         assert_eq!(rows, 1024);

@@ -62,7 +62,10 @@ fn every_shipped_scene_loads_and_runs() {
 
 #[test]
 fn malformed_ron_names_file_line_and_column() {
-    let e = parse(&scene_text(|s| s.replace("damping: 10.0,", "damping: 10.0"))).unwrap_err();
+    let e = parse(&scene_text(|s| {
+        s.replace("damping: 10.0,", "damping: 10.0")
+    }))
+    .unwrap_err();
     let msg = e.to_string();
     assert!(matches!(e, SceneError::Parse { line: 4, .. }), "{msg}");
     assert!(msg.starts_with("bad.ron:4:"), "{msg}");
@@ -77,7 +80,10 @@ fn unknown_integrator_is_a_parse_error() {
 #[test]
 fn spring_index_out_of_range() {
     let msg = invalid(|s| s.replace("(a: 0, b: 1,", "(a: 0, b: 7,"));
-    assert!(msg.contains("bad.ron") && msg.contains("springs[0]: b = 7 is out of range"), "{msg}");
+    assert!(
+        msg.contains("bad.ron") && msg.contains("springs[0]: b = 7 is out of range"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -90,7 +96,10 @@ fn spring_to_itself() {
 fn bad_masses() {
     for bad in ["0.0", "-1.0", "NaN", "inf"] {
         let msg = invalid(|s| s.replacen("mass: 1.0", &format!("mass: {bad}"), 1));
-        assert!(msg.contains("particles[0]: mass must be finite and > 0"), "{bad}: {msg}");
+        assert!(
+            msg.contains("particles[0]: mass must be finite and > 0"),
+            "{bad}: {msg}"
+        );
     }
 }
 
@@ -105,7 +114,10 @@ fn bad_dt() {
 #[test]
 fn negative_stiffness() {
     let msg = invalid(|s| s.replace("stiffness: 10000.0", "stiffness: -5.0"));
-    assert!(msg.contains("springs[0]: stiffness must be finite and >= 0, got -5"), "{msg}");
+    assert!(
+        msg.contains("springs[0]: stiffness must be finite and >= 0, got -5"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -115,9 +127,17 @@ fn nan_or_infinity_anywhere() {
         ("damping: 10.0", "damping: NaN", "damping"),
         ("ground: Some(0.0)", "ground: Some(NaN)", "ground"),
         ("pos: (0.5, 0.8)", "pos: (NaN, 0.8)", "particles[1]: pos"),
-        ("vel: (0.0, 0.0), mass: 1.0, pinned: false", "vel: (inf, 0.0), mass: 1.0, pinned: false", "particles[1]: vel"),
+        (
+            "vel: (0.0, 0.0), mass: 1.0, pinned: false",
+            "vel: (inf, 0.0), mass: 1.0, pinned: false",
+            "particles[1]: vel",
+        ),
         ("rest: 0.1", "rest: inf", "springs[0]: rest"),
-        ("stiffness: 10000.0", "stiffness: NaN", "springs[0]: stiffness"),
+        (
+            "stiffness: 10000.0",
+            "stiffness: NaN",
+            "springs[0]: stiffness",
+        ),
     ];
     for (from, to, named) in cases {
         let msg = invalid(|s| s.replace(from, to));
@@ -127,7 +147,10 @@ fn nan_or_infinity_anywhere() {
 
 #[test]
 fn every_problem_is_listed() {
-    let msg = invalid(|s| s.replace("dt: 0.0001", "dt: 0.0").replace("(a: 0, b: 1,", "(a: 0, b: 9,"));
+    let msg = invalid(|s| {
+        s.replace("dt: 0.0001", "dt: 0.0")
+            .replace("(a: 0, b: 1,", "(a: 0, b: 9,")
+    });
     // dt is checked first; the spring error is listed with it only when the header is valid.
     assert!(msg.contains("dt: must be finite"), "{msg}");
 }

@@ -32,14 +32,20 @@ fn systems_for_unused_features_do_not_run() {
     let mut app = app_with(presets::resolve("cloth32").unwrap().scene);
     step(&mut app, 40);
     let n = *app.world().resource::<PassCounts>();
-    assert_eq!((n.springs, n.damping, n.ground, n.advance), (40, 40, 40, 40));
+    assert_eq!(
+        (n.springs, n.damping, n.ground, n.advance),
+        (40, 40, 40, 40)
+    );
 
     // Switching a feature off at run time stops its pass from the next step on.
     app.world_mut().resource_mut::<SimParams>().damping = 0.0;
     app.world_mut().resource_mut::<SimParams>().ground = None;
     step(&mut app, 10);
     let n = *app.world().resource::<PassCounts>();
-    assert_eq!((n.springs, n.damping, n.ground, n.advance), (50, 40, 40, 50));
+    assert_eq!(
+        (n.springs, n.damping, n.ground, n.advance),
+        (50, 40, 40, 50)
+    );
 }
 
 #[test]

@@ -220,7 +220,9 @@ pub fn snapshot(world: &mut World) -> Scene {
         })
         .collect();
     springs.sort_by_key(|s| s.0);
-    let click = world.get_resource::<CurrentScene>().and_then(|c| c.0.scene.click);
+    let click = world
+        .get_resource::<CurrentScene>()
+        .and_then(|c| c.0.scene.click);
     Scene {
         gravity: (params.gravity.x, params.gravity.y),
         damping: params.damping,

@@ -2,7 +2,6 @@
 
 use super::format::*;
 use super::generate::Expanded;
-use crate::sim::Integrator;
 
 /// Scenes larger than this are refused before anything is allocated for them.
 pub const MAX_PARTICLES: usize = 20_000_000;
@@ -30,16 +29,12 @@ pub fn validate(scene: &Scene) -> Result<Expanded, Vec<String>> {
     if !(scene.dt.is_finite() && scene.dt > 0.0) {
         p.push(format!("dt: must be finite and > 0, got {}", scene.dt));
     }
-    if !scene.integrator.is_available() {
-        p.push(format!(
-            "integrator: {:?} is not implemented in this build (available: {})",
-            scene.integrator,
-            available_integrators()
-        ));
-    }
     if let Some(c) = &scene.click {
         if !(c.radius.is_finite() && c.radius >= 0.0) {
-            p.push(format!("click.radius: must be finite and >= 0, got {}", c.radius));
+            p.push(format!(
+                "click.radius: must be finite and >= 0, got {}",
+                c.radius
+            ));
         }
         check_mass(&mut p, "click", c.mass);
         check_stiffness(&mut p, "click", c.stiffness);
@@ -60,7 +55,9 @@ pub fn validate(scene: &Scene) -> Result<Expanded, Vec<String>> {
                 ..
             } => {
                 if cols < 2 || rows < 2 {
-                    p.push(format!("{at}: a grid needs cols >= 2 and rows >= 2, got {cols} x {rows}"));
+                    p.push(format!(
+                        "{at}: a grid needs cols >= 2 and rows >= 2, got {cols} x {rows}"
+                    ));
                 }
                 if !(finite2(min) && finite2(max) && finite2(vel)) {
                     p.push(format!("{at}: min, max and vel must be finite"));
@@ -129,20 +126,16 @@ pub fn validate(scene: &Scene) -> Result<Expanded, Vec<String>> {
         }
         check_stiffness(&mut p, &at, s.stiffness);
         if !(s.rest.is_finite() && s.rest >= 0.0) {
-            p.push(format!("{at}: rest must be finite and >= 0, got {}", s.rest));
+            p.push(format!(
+                "{at}: rest must be finite and >= 0, got {}",
+                s.rest
+            ));
         }
     }
     if !p.list.is_empty() {
         return Err(p.finish());
     }
     Ok(scene.expand())
-}
-
-fn available_integrators() -> String {
-    Integrator::available()
-        .map(|i| format!("{i:?}"))
-        .collect::<Vec<_>>()
-        .join(", ")
 }
 
 fn check_mass(p: &mut Problems, at: &str, mass: f64) {
@@ -174,7 +167,8 @@ impl Problems {
 
     fn finish(mut self) -> Vec<String> {
         if self.more > 0 {
-            self.list.push(format!("... and {} more problems", self.more));
+            self.list
+                .push(format!("... and {} more problems", self.more));
         }
         self.list
     }

@@ -1,6 +1,7 @@
 //! The simulation: data model, parameters, packed solver, kernels and schedule.
 
 pub mod components;
+pub mod integrators;
 pub mod kernels;
 pub mod params;
 pub mod schedule;
@@ -8,6 +9,9 @@ pub mod solver;
 pub mod sync;
 
 pub use components::*;
+pub use integrators::CgSettings;
 pub use params::*;
-pub use schedule::{PhysicsSet, PhysicsStep, SimPlugin, StepBudget, StepSet, TickPlan, advance, pack};
+pub use schedule::{
+    PhysicsSet, PhysicsStep, SimPlugin, StepBudget, StepSet, TickPlan, advance, pack,
+};
 pub use solver::{Energy, PackedSpring, Solver};

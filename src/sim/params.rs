@@ -42,19 +42,6 @@ impl Integrator {
             Integrator::ImplicitEuler => "implicit-euler",
         }
     }
-
-    /// Integrators that are implemented in this build.
-    pub fn is_available(self) -> bool {
-        matches!(
-            self,
-            Integrator::ExplicitEuler | Integrator::SymplecticEuler
-        )
-    }
-
-    /// The available integrators, in menu order.
-    pub fn available() -> impl Iterator<Item = Integrator> {
-        Self::ALL.into_iter().filter(|i| i.is_available())
-    }
 }
 
 impl std::fmt::Display for Integrator {

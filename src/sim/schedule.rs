@@ -5,6 +5,7 @@
 //! runs the [`PhysicsStep`] schedule [`TickPlan::steps_per_tick`] times in a tight loop with a
 //! single-threaded executor; the ECS sync happens once per tick, not per step.
 
+use super::integrators::{self, CgSettings};
 use super::kernels;
 use super::params::*;
 use super::solver::Solver;
@@ -94,6 +95,7 @@ impl Plugin for SimPlugin {
             .init_resource::<Solver>()
             .init_resource::<TickPlan>()
             .init_resource::<StepBudget>()
+            .init_resource::<CgSettings>()
             .init_resource::<super::components::Serials>();
 
         app.configure_sets(
@@ -104,7 +106,9 @@ impl Plugin for SimPlugin {
             FixedUpdate,
             (
                 sync_into_solver.in_set(PhysicsSet::Prepare),
-                run_steps.in_set(PhysicsSet::Step).run_if(simulation_running),
+                run_steps
+                    .in_set(PhysicsSet::Step)
+                    .run_if(simulation_running),
                 sync_from_solver.in_set(PhysicsSet::Writeback),
                 enforce_step_budget.after(PhysicsSet::Writeback),
             ),
@@ -135,11 +139,20 @@ impl Plugin for SimPlugin {
                     )
                         .chain()
                         .in_set(StepSet::Forces),
-                    integrate_velocity.in_set(StepSet::Integrate),
+                    (
+                        explicit_euler.run_if(integrator_is(Integrator::ExplicitEuler)),
+                        symplectic_euler.run_if(integrator_is(Integrator::SymplecticEuler)),
+                        velocity_verlet.run_if(integrator_is(Integrator::VelocityVerlet)),
+                        rk4.run_if(integrator_is(Integrator::Rk4)),
+                        implicit_euler.run_if(integrator_is(Integrator::ImplicitEuler)),
+                    )
+                        .in_set(StepSet::Integrate),
                     damp_velocity
                         .run_if(damping_enabled)
                         .in_set(StepSet::Damping),
-                    ground_contact.run_if(ground_enabled).in_set(StepSet::Ground),
+                    ground_contact
+                        .run_if(ground_enabled)
+                        .in_set(StepSet::Ground),
                     advance_positions.in_set(StepSet::Advance),
                 ));
         });
@@ -154,6 +167,11 @@ pub fn simulation_running(params: Res<SimParams>, status: Res<SimStatus>) -> boo
 
 pub fn scene_has_springs(solver: Res<Solver>) -> bool {
     !solver.springs.is_empty()
+}
+
+/// Only the selected integrator's system runs.
+pub fn integrator_is(which: Integrator) -> impl Fn(Res<SimParams>) -> bool + Clone {
+    move |params: Res<SimParams>| params.integrator == which
 }
 
 pub fn damping_enabled(params: Res<SimParams>) -> bool {
@@ -178,16 +196,33 @@ fn accumulate_spring_forces(mut solver: ResMut<Solver>, mut n: ResMut<PassCounts
     n.springs += 1;
 }
 
-fn integrate_velocity(
+fn explicit_euler(mut solver: ResMut<Solver>, params: Res<SimParams>, mut n: ResMut<PassCounts>) {
+    integrators::explicit_euler(&mut solver, params.dt);
+    n.integrate += 1;
+}
+
+fn symplectic_euler(mut solver: ResMut<Solver>, params: Res<SimParams>, mut n: ResMut<PassCounts>) {
+    integrators::symplectic_euler(&mut solver, params.dt);
+    n.integrate += 1;
+}
+
+fn velocity_verlet(mut solver: ResMut<Solver>, params: Res<SimParams>, mut n: ResMut<PassCounts>) {
+    integrators::velocity_verlet(&mut solver, params.dt, params.gravity);
+    n.integrate += 1;
+}
+
+fn rk4(mut solver: ResMut<Solver>, params: Res<SimParams>, mut n: ResMut<PassCounts>) {
+    integrators::rk4(&mut solver, params.dt, params.gravity);
+    n.integrate += 1;
+}
+
+fn implicit_euler(
     mut solver: ResMut<Solver>,
     params: Res<SimParams>,
+    settings: Res<CgSettings>,
     mut n: ResMut<PassCounts>,
 ) {
-    let s = &mut *solver;
-    if params.integrator == Integrator::ExplicitEuler {
-        s.drift.copy_from_slice(&s.v);
-    }
-    kernels::kick(&mut s.v, &s.f, &s.inv_mass, params.dt);
+    integrators::implicit_euler(&mut solver, params.dt, *settings);
     n.integrate += 1;
 }
 
@@ -210,8 +245,8 @@ fn advance_positions(
 ) {
     let s = &mut *solver;
     let drift = match params.integrator {
-        Integrator::ExplicitEuler => &s.drift,
-        _ => &s.v,
+        Integrator::ExplicitEuler | Integrator::VelocityVerlet | Integrator::Rk4 => &s.drift,
+        Integrator::SymplecticEuler | Integrator::ImplicitEuler => &s.v,
     };
     let finite = kernels::advance(&mut s.x, drift, &s.v, params.dt);
     s.non_finite = !finite;
@@ -249,7 +284,9 @@ fn plan_tick(
     mut budget: ResMut<StepBudget>,
 ) {
     budget.frame_start = Some(Instant::now());
-    let steps = (plan.target_tick_seconds / params.dt).round().clamp(1.0, 1e6) as u32;
+    let steps = (plan.target_tick_seconds / params.dt)
+        .round()
+        .clamp(1.0, 1e6) as u32;
     if plan.steps_per_tick != steps {
         plan.steps_per_tick = steps;
     }

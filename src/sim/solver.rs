@@ -41,6 +41,8 @@ pub struct Solver {
     pub applied_override: Option<f64>,
     /// Set by the position update when the step produced a non-finite position or velocity.
     pub non_finite: bool,
+    /// Work buffers of the multi-stage integrators and the implicit solve's counters.
+    pub scratch: super::integrators::Scratch,
 }
 
 impl Solver {

@@ -49,7 +49,8 @@ type ParticleData<'a> = (
     &'a mut SolverIndex,
 );
 type Particles<'w, 's> = Query<'w, 's, ParticleData<'static>, Without<Spring>>;
-type Springs<'w, 's> = Query<'w, 's, (Entity, Ref<'static, Spring>, &'static mut SolverIndex), Without<Particle>>;
+type Springs<'w, 's> =
+    Query<'w, 's, (Entity, Ref<'static, Spring>, &'static mut SolverIndex), Without<Particle>>;
 
 /// Brings ECS edits into the solver. Runs at the start of every fixed tick.
 pub fn sync_into_solver(
@@ -167,6 +168,7 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &mut Springs
         springs: packed.into_iter().map(|p| p.2).collect(),
         applied_override: None,
         non_finite: false,
+        scratch: Default::default(),
     };
 }
 

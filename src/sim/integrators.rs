@@ -1,0 +1,293 @@
+//! The integrators' updates. Each computes, from the start-of-step state (x0, v0) and the
+//! start-of-step force f0 = f(x0), the end-of-step velocity v1 and the drift velocity u with
+//! which the position update moves the particle (x1 = x0 + dt u). Damping and ground contact
+//! run after, as separate passes, the same for every method.
+//!
+//! | method | force evaluations | v1 | u |
+//! | --- | --- | --- | --- |
+//! | explicit Euler | 1 | v0 + dt a0 | v0 |
+//! | symplectic Euler | 1 | v0 + dt a0 | v1 (after damping and contact) |
+//! | velocity Verlet | 2 | v½ + dt/2 a(x0 + dt v½), v½ = v0 + dt/2 a0 | v½ |
+//! | RK4 | 4 | v0 + dt/6 (a1 + 2a2 + 2a3 + a4) | (v0 + 2 v2 + 2 v3 + v4)/6 |
+//! | implicit Euler | 1 + CG | (M − dt² K) Δv = dt (f0 + dt K v0) | v1 (after damping and contact) |
+//!
+//! with a = f/m, and a = 0 for pinned particles (inverse mass 0).
+
+use super::kernels::{accumulate_spring_forces, apply_gravity};
+use super::solver::{PackedSpring, Solver};
+use bevy::math::DVec2;
+
+/// Buffers the multi-stage methods reuse from step to step.
+#[derive(Debug, Default, Clone)]
+pub struct Scratch {
+    x: Vec<DVec2>,
+    f: Vec<DVec2>,
+    sum_u: Vec<DVec2>,
+    sum_a: Vec<DVec2>,
+    stage_v: Vec<DVec2>,
+    cg: Cg,
+}
+
+impl Scratch {
+    fn fit(&mut self, n: usize) {
+        for b in [
+            &mut self.x,
+            &mut self.f,
+            &mut self.sum_u,
+            &mut self.sum_a,
+            &mut self.stage_v,
+        ] {
+            b.resize(n, DVec2::ZERO);
+        }
+    }
+}
+
+/// f(x) = m g + Σ spring forces.
+fn forces(f: &mut [DVec2], x: &[DVec2], mass: &[f64], springs: &[PackedSpring], g: DVec2) {
+    apply_gravity(f, mass, g);
+    accumulate_spring_forces(f, x, springs);
+}
+
+/// Explicit Euler: keeps v0 as the drift velocity, then v += dt a0.
+pub fn explicit_euler(s: &mut Solver, dt: f64) {
+    s.drift.copy_from_slice(&s.v);
+    super::kernels::kick(&mut s.v, &s.f, &s.inv_mass, dt);
+}
+
+/// Symplectic Euler: v += dt a0 (the drift velocity is v itself).
+pub fn symplectic_euler(s: &mut Solver, dt: f64) {
+    super::kernels::kick(&mut s.v, &s.f, &s.inv_mass, dt);
+}
+
+/// Velocity Verlet, kick-drift-kick, with a second force evaluation at x0 + dt v½.
+pub fn velocity_verlet(s: &mut Solver, dt: f64, gravity: DVec2) {
+    let n = s.x.len();
+    s.scratch.fit(n);
+    let half = 0.5 * dt;
+    for i in 0..n {
+        let v_half = s.v[i] + s.f[i] * (half * s.inv_mass[i]);
+        s.drift[i] = v_half;
+        s.scratch.x[i] = s.x[i] + v_half * dt;
+    }
+    let sc = &mut s.scratch;
+    forces(&mut sc.f, &sc.x, &s.mass, &s.springs, gravity);
+    for i in 0..n {
+        s.v[i] = s.drift[i] + sc.f[i] * (half * s.inv_mass[i]);
+    }
+}
+
+/// Classic RK4 on x' = v, v' = f(x)/m.
+pub fn rk4(s: &mut Solver, dt: f64, gravity: DVec2) {
+    let n = s.x.len();
+    s.scratch.fit(n);
+    let sc = &mut s.scratch;
+    // Stage 1: (v0, a0).
+    for i in 0..n {
+        let a = s.f[i] * s.inv_mass[i];
+        sc.sum_u[i] = s.v[i];
+        sc.sum_a[i] = a;
+        sc.stage_v[i] = s.v[i];
+        sc.f[i] = a; // holds the previous stage's acceleration
+    }
+    // Stages 2..4: evaluate at x0 + c dt k_x(prev), with k_v(prev) advancing the velocity.
+    for (c, w) in [(0.5, 2.0), (0.5, 2.0), (1.0, 1.0)] {
+        for i in 0..n {
+            let (kx, ka) = (sc.stage_v[i], sc.f[i]);
+            sc.x[i] = s.x[i] + kx * (c * dt);
+            sc.stage_v[i] = s.v[i] + ka * (c * dt);
+        }
+        forces(&mut sc.f, &sc.x, &s.mass, &s.springs, gravity);
+        for i in 0..n {
+            sc.f[i] *= s.inv_mass[i];
+            sc.sum_u[i] += sc.stage_v[i] * w;
+            sc.sum_a[i] += sc.f[i] * w;
+        }
+    }
+    for i in 0..n {
+        s.drift[i] = sc.sum_u[i] / 6.0;
+        s.v[i] += sc.sum_a[i] * (dt / 6.0);
+    }
+}
+
+/// Settings of the implicit Euler solve.
+#[derive(bevy::prelude::Resource, Debug, Clone, Copy, PartialEq)]
+pub struct CgSettings {
+    /// Stop when |r| <= tolerance · |b| (relative residual of the linear system).
+    pub tolerance: f64,
+    pub max_iterations: u32,
+}
+
+impl Default for CgSettings {
+    fn default() -> Self {
+        CgSettings {
+            tolerance: 1e-8,
+            max_iterations: 500,
+        }
+    }
+}
+
+/// Conjugate-gradient buffers and counters.
+#[derive(Debug, Default, Clone)]
+pub struct Cg {
+    /// The previous step's Δv, the warm start of the next solve.
+    dv: Vec<DVec2>,
+    r: Vec<DVec2>,
+    p: Vec<DVec2>,
+    ap: Vec<DVec2>,
+    z: Vec<DVec2>,
+    diag: Vec<f64>,
+    /// Per spring: the 2×2 stiffness block's coefficients (α, β): K_s = −k (α I + β d̂d̂ᵀ).
+    blocks: Vec<(DVec2, f64, f64)>,
+    pub iterations: u64,
+    pub solves: u64,
+    pub unconverged: u64,
+    pub last_iterations: u32,
+}
+
+impl Cg {
+    fn fit(&mut self, n: usize, springs: usize) {
+        for b in [
+            &mut self.dv,
+            &mut self.r,
+            &mut self.p,
+            &mut self.ap,
+            &mut self.z,
+        ] {
+            b.resize(n, DVec2::ZERO);
+        }
+        self.diag.resize(n, 0.0);
+        self.blocks.resize(springs, (DVec2::ZERO, 0.0, 0.0));
+    }
+}
+
+/// Backward Euler linearised once per step (one Newton step):
+/// (M − dt² K) Δv = dt (f0 + dt K v0), v1 = v0 + Δv, solved matrix-free by Jacobi-
+/// preconditioned conjugate gradients, warm-started from the previous Δv. K is the spring
+/// Jacobian with the transverse term of compressed springs dropped (coefficient
+/// max(0, 1 − L/l)), which keeps M − dt² K symmetric positive definite. Pinned particles are
+/// held (their rows are projected out).
+pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings) {
+    let n = s.x.len();
+    let cg = &mut s.scratch.cg;
+    cg.fit(n, s.springs.len());
+    let h2 = dt * dt;
+
+    // Stiffness blocks at x0 and the Jacobi diagonal of A = M − dt² K.
+    for (i, d) in cg.diag.iter_mut().enumerate() {
+        *d = s.mass[i];
+    }
+    for (sp, block) in s.springs.iter().zip(cg.blocks.iter_mut()) {
+        let (a, b) = (sp.a as usize, sp.b as usize);
+        let d = s.x[a] - s.x[b];
+        let l = d.length();
+        if l < super::kernels::MIN_SPRING_LENGTH {
+            *block = (DVec2::ZERO, 0.0, 0.0);
+            continue;
+        }
+        let dir = d / l;
+        let alpha = (1.0 - sp.rest / l).max(0.0);
+        let beta = 1.0 - alpha;
+        *block = (dir, sp.k * alpha, sp.k * beta);
+        // Diagonal of −K_s for either end: k (α + β d̂ₓ²) and k (α + β d̂ᵧ²); averaged.
+        let diag = sp.k * (alpha + beta * 0.5);
+        cg.diag[a] += h2 * diag;
+        cg.diag[b] += h2 * diag;
+    }
+
+    // b = dt (f0 + dt K v0), zero on pinned particles.
+    let free = |i: usize| s.inv_mass[i] != 0.0;
+    neg_k_times(&mut cg.ap, &s.v, &s.springs, &cg.blocks); // ap = −K v0
+    let mut b_norm2 = 0.0;
+    for i in 0..n {
+        let b = if free(i) {
+            (s.f[i] - cg.ap[i] * dt) * dt
+        } else {
+            DVec2::ZERO
+        };
+        cg.z[i] = b; // keep b in z for now
+        b_norm2 += b.length_squared();
+    }
+    // r = b − A dv (warm start).
+    for i in 0..n {
+        if !free(i) {
+            cg.dv[i] = DVec2::ZERO;
+        }
+    }
+    apply_a(cg, &s.mass, &s.springs, h2, &s.inv_mass);
+    for i in 0..n {
+        cg.r[i] = cg.z[i] - cg.ap[i];
+    }
+    let tol2 = settings.tolerance * settings.tolerance * b_norm2;
+    let mut rz = 0.0;
+    for i in 0..n {
+        cg.z[i] = cg.r[i] / cg.diag[i];
+        cg.p[i] = cg.z[i];
+        rz += cg.r[i].dot(cg.z[i]);
+    }
+    let mut iterations = 0;
+    let mut r2: f64 = cg.r.iter().map(|r| r.length_squared()).sum();
+    while r2 > tol2 && iterations < settings.max_iterations {
+        // ap = A p (A reads p through dv's slot swap).
+        std::mem::swap(&mut cg.dv, &mut cg.p);
+        apply_a(cg, &s.mass, &s.springs, h2, &s.inv_mass);
+        std::mem::swap(&mut cg.dv, &mut cg.p);
+        let pap: f64 = cg.p.iter().zip(&cg.ap).map(|(p, q)| p.dot(*q)).sum();
+        if !(pap > 0.0) {
+            break; // not positive definite along p (or non-finite): stop with what we have
+        }
+        let alpha = rz / pap;
+        r2 = 0.0;
+        let mut rz_new = 0.0;
+        for i in 0..n {
+            cg.dv[i] += cg.p[i] * alpha;
+            cg.r[i] -= cg.ap[i] * alpha;
+            cg.z[i] = cg.r[i] / cg.diag[i];
+            r2 += cg.r[i].length_squared();
+            rz_new += cg.r[i].dot(cg.z[i]);
+        }
+        let beta = rz_new / rz;
+        rz = rz_new;
+        for i in 0..n {
+            cg.p[i] = cg.z[i] + cg.p[i] * beta;
+        }
+        iterations += 1;
+    }
+    cg.iterations += iterations as u64;
+    cg.solves += 1;
+    cg.last_iterations = iterations;
+    if r2 > tol2 {
+        cg.unconverged += 1;
+    }
+    for i in 0..n {
+        s.v[i] += cg.dv[i];
+    }
+}
+
+/// out = −K p, spring by spring: −K_s (p_a − p_b) on a, the opposite on b.
+fn neg_k_times(
+    out: &mut [DVec2],
+    p: &[DVec2],
+    springs: &[PackedSpring],
+    blocks: &[(DVec2, f64, f64)],
+) {
+    out.fill(DVec2::ZERO);
+    for (sp, &(dir, ka, kb)) in springs.iter().zip(blocks) {
+        let (a, b) = (sp.a as usize, sp.b as usize);
+        let dp = p[a] - p[b];
+        let f = dp * ka + dir * (kb * dir.dot(dp));
+        out[a] += f;
+        out[b] -= f;
+    }
+}
+
+/// ap = A dv = M dv − dt² K dv, with pinned rows held at zero.
+fn apply_a(cg: &mut Cg, mass: &[f64], springs: &[PackedSpring], h2: f64, inv_mass: &[f64]) {
+    neg_k_times(&mut cg.ap, &cg.dv, springs, &cg.blocks);
+    for i in 0..mass.len() {
+        cg.ap[i] = if inv_mass[i] != 0.0 {
+            cg.dv[i] * mass[i] + cg.ap[i] * h2
+        } else {
+            DVec2::ZERO
+        };
+    }
+}

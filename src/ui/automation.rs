@@ -1,0 +1,80 @@
+//! Scripted runs of the app (used by the GUI test and to make the README's screenshot):
+//! a screenshot after a delay, a status file, quitting after a delay.
+
+use super::stats::LiveStats;
+use super::view::CanvasView;
+use crate::sim::{SimClock, SimParams, Solver};
+use bevy::prelude::*;
+use bevy::render::view::screenshot::{Screenshot, save_to_disk};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+#[derive(Resource, Debug, Clone, Default)]
+pub struct AppOptions {
+    /// Run even if the scene starts paused.
+    pub start_running: bool,
+    /// Save a PNG of the window to this path after this many seconds.
+    pub screenshot: Option<(PathBuf, f64)>,
+    /// Quit after this many seconds.
+    pub exit_after: Option<f64>,
+    /// Write a JSON status line to this file twice a second.
+    pub report: Option<PathBuf>,
+}
+
+#[derive(Default)]
+pub struct DriveState {
+    started: Option<Instant>,
+    screenshot_taken: bool,
+    last_report: Option<Instant>,
+}
+
+#[allow(clippy::too_many_arguments)]
+pub fn drive(
+    mut commands: Commands,
+    view: Res<CanvasView>,
+    options: Res<AppOptions>,
+    mut state: Local<DriveState>,
+    mut exit: MessageWriter<AppExit>,
+    solver: Res<Solver>,
+    clock: Res<SimClock>,
+    params: Res<SimParams>,
+    stats: Res<LiveStats>,
+) {
+    let started = *state.started.get_or_insert_with(Instant::now);
+    let elapsed = started.elapsed().as_secs_f64();
+    if let Some((path, after)) = &options.screenshot
+        && !state.screenshot_taken
+        && elapsed >= *after
+    {
+        state.screenshot_taken = true;
+        commands
+            .spawn(Screenshot::primary_window())
+            .observe(save_to_disk(path.clone()));
+    }
+    if let Some(path) = &options.report
+        && state
+            .last_report
+            .is_none_or(|t| t.elapsed() > Duration::from_millis(500))
+    {
+        state.last_report = Some(Instant::now());
+        let line = serde_json::json!({
+            "particles": solver.particle_count(),
+            "springs": solver.spring_count(),
+            "steps": clock.steps,
+            "sim_time": clock.time,
+            "paused": params.paused,
+            "fps": stats.fps,
+            "real_time_factor": stats.real_time_factor,
+            "elapsed": elapsed,
+            "pinned": solver.inv_mass.iter().filter(|w| **w == 0.0).count(),
+            // The window-to-world mapping, so scripts can click at world coordinates.
+            "view": { "scale": view.scale, "center": [view.center.x, view.center.y],
+                      "panel_width": view.panel_width },
+        });
+        // A status file that cannot be written only loses the status, never the app.
+        let _ = std::fs::write(path, format!("{line}\n"));
+    }
+    if options.exit_after.is_some_and(|t| elapsed >= t) {
+        exit.write(AppExit::Success);
+    }
+}

@@ -1,0 +1,85 @@
+//! The desktop app: a window onto the simulation, an egui control panel, mouse and keyboard.
+
+mod automation;
+mod draw;
+mod input;
+mod panel;
+mod stats;
+mod view;
+
+use crate::scene::{LoadedScene, load_into_world};
+use crate::sim::{SimParams, SimPlugin};
+use bevy::prelude::*;
+use bevy::window::WindowResolution;
+use bevy_egui::{EguiPlugin, EguiPrimaryContextPass};
+use std::path::PathBuf;
+
+pub use automation::AppOptions;
+
+/// Everything the app adds on top of [`SimPlugin`]: view, drawing, input, panel.
+pub struct AppPlugin {
+    pub scene: LoadedScene,
+    pub options: AppOptions,
+}
+
+impl Plugin for AppPlugin {
+    fn build(&self, app: &mut App) {
+        let scene = self.scene.clone();
+        let start_running = self.options.start_running;
+        app.insert_resource(ClearColor(draw::BACKGROUND))
+            .insert_resource(self.options.clone())
+            .init_resource::<view::CanvasView>()
+            .init_resource::<stats::LiveStats>()
+            .init_resource::<panel::PanelState>()
+            .add_systems(Startup, view::spawn_camera)
+            .add_systems(Startup, move |world: &mut World| {
+                load_into_world(world, &scene);
+                if start_running {
+                    world.resource_mut::<SimParams>().paused = false;
+                }
+            })
+            .add_systems(EguiPrimaryContextPass, panel::side_panel)
+            .add_systems(
+                Update,
+                (
+                    view::fit_camera,
+                    input::keyboard,
+                    input::add_particle_on_click.after(view::fit_camera),
+                    stats::measure,
+                    automation::drive,
+                    draw::attach_particle_meshes,
+                    draw::place_particles,
+                    draw::draw_springs,
+                    draw::draw_frame,
+                ),
+            );
+    }
+}
+
+/// Opens the window and runs the app until it is closed.
+pub fn run_app(scene: LoadedScene, options: AppOptions) {
+    let title = format!("hooke: {}", scene.name());
+    App::new()
+        .add_plugins(DefaultPlugins.set(WindowPlugin {
+            primary_window: Some(Window {
+                title,
+                name: Some("hooke".into()),
+                resolution: WindowResolution::new(1280, 800),
+                ..default()
+            }),
+            ..default()
+        }))
+        .add_plugins(EguiPlugin::default())
+        .add_plugins(SimPlugin)
+        .add_plugins(AppPlugin { scene, options })
+        .run();
+}
+
+/// Where "Save scene" writes: `saved/<scene>-<n>.ron` in the working directory.
+fn save_path(name: &str) -> PathBuf {
+    let dir = PathBuf::from("saved");
+    (1..)
+        .map(|n| dir.join(format!("{name}-{n}.ron")))
+        .find(|p| !p.exists())
+        .unwrap_or_else(|| dir.join(format!("{name}.ron")))
+}

@@ -1,0 +1,234 @@
+//! The control panel: scene, run state, integrator, stiffness, damping, dt, live figures.
+
+use super::input::{Notice, reset, save};
+use super::stats::LiveStats;
+use super::view::CanvasView;
+use crate::scene::{CurrentScene, load_into_world, presets};
+use crate::sim::*;
+use bevy::prelude::*;
+use bevy_egui::{EguiContexts, egui};
+use std::path::Path;
+
+/// Panel state that is not simulation state.
+#[derive(Resource, Debug, Clone)]
+pub struct PanelState {
+    /// Scene picker entries: (label, what to pass to `presets::resolve`).
+    scenes: Vec<(String, String)>,
+    /// The stiffness slider's value (applied to every spring when moved).
+    stiffness: f64,
+}
+
+impl Default for PanelState {
+    fn default() -> Self {
+        let mut scenes: Vec<(String, String)> = presets::scene_files(Path::new("assets/scenes"))
+            .into_iter()
+            .map(|p| {
+                let label = p
+                    .strip_prefix("assets/scenes")
+                    .unwrap_or(&p)
+                    .with_extension("")
+                    .display()
+                    .to_string();
+                (label, p.display().to_string())
+            })
+            .collect();
+        for (name, _) in presets::BUILTIN {
+            if !scenes.iter().any(|(label, _)| label == name) {
+                scenes.push((name.to_string(), name.to_string()));
+            }
+        }
+        PanelState {
+            scenes,
+            stiffness: DEFAULT_STIFFNESS,
+        }
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+pub fn side_panel(
+    mut commands: Commands,
+    mut contexts: EguiContexts,
+    mut params: ResMut<SimParams>,
+    mut state: ResMut<PanelState>,
+    mut view: ResMut<CanvasView>,
+    notice: Option<Res<Notice>>,
+    scene: Option<Res<CurrentScene>>,
+    solver: Res<Solver>,
+    clock: Res<SimClock>,
+    status: Res<SimStatus>,
+    stats: Res<LiveStats>,
+) -> Result {
+    let ctx = contexts.ctx_mut()?;
+    let mut root = egui::Ui::new(
+        ctx.clone(),
+        "hooke-root".into(),
+        egui::UiBuilder::new()
+            .layer_id(egui::LayerId::background())
+            .max_rect(ctx.viewport_rect()),
+    );
+    if let Some(scene) = scene.as_ref().filter(|s| s.is_changed()) {
+        // Show the new scene's stiffness: its first spring's, else what a click would use.
+        let e = &scene.0.expanded;
+        state.stiffness = e
+            .springs
+            .first()
+            .map(|s| s.stiffness)
+            .or(scene.0.scene.click.map(|c| c.stiffness))
+            .unwrap_or(DEFAULT_STIFFNESS)
+            .clamp(10.0, 1e6);
+    }
+    let mut p = params.clone();
+    let scene_name = scene.as_ref().map(|s| s.0.name()).unwrap_or_default();
+    let response = egui::Panel::left("controls")
+        .resizable(false)
+        .exact_size(290.0)
+        .show(&mut root, |ui| {
+            ui.add_space(6.0);
+            ui.heading("hooke");
+            ui.label("2D mass-spring simulator");
+            ui.separator();
+
+            // Scene
+            ui.horizontal(|ui| {
+                ui.label("Scene");
+                egui::ComboBox::from_id_salt("scene")
+                    .selected_text(&scene_name)
+                    .width(150.0)
+                    .show_ui(ui, |ui| {
+                        for (label, target) in &state.scenes {
+                            if ui.selectable_label(*label == scene_name, label).clicked() {
+                                match presets::resolve(target) {
+                                    Ok(loaded) => commands
+                                        .queue(move |w: &mut World| load_into_world(w, &loaded)),
+                                    Err(e) => commands
+                                        .insert_resource(Notice(Some((e.to_string(), true)))),
+                                }
+                            }
+                        }
+                    });
+            });
+            ui.horizontal(|ui| {
+                let run_label = if p.paused {
+                    "▶ Run (G)"
+                } else {
+                    "⏸ Pause (G)"
+                };
+                if ui.button(run_label).clicked() {
+                    p.paused = !p.paused;
+                }
+                if ui.button("Reset (R)").clicked() {
+                    commands.queue(reset);
+                }
+                if ui.button("Save (S)").clicked() {
+                    commands.queue(save);
+                }
+            });
+            match *status {
+                SimStatus::Running if p.paused => ui.label("paused"),
+                SimStatus::Running => ui.label("running"),
+                SimStatus::BlewUp { step, time } => ui.colored_label(
+                    egui::Color32::from_rgb(255, 110, 90),
+                    format!(
+                        "Blew up at step {step} (t = {time:.4} s): a position or velocity \
+                         became infinite or NaN. Lower dt or the stiffness, then Reset."
+                    ),
+                ),
+            };
+            if let Some((text, is_error)) = notice.as_ref().and_then(|n| n.0.clone()) {
+                let color = if is_error {
+                    egui::Color32::from_rgb(255, 110, 90)
+                } else {
+                    egui::Color32::from_rgb(140, 200, 140)
+                };
+                ui.colored_label(color, text);
+            }
+            ui.separator();
+
+            // Method and parameters
+            egui::Grid::new("params").num_columns(2).show(ui, |ui| {
+                ui.label("Integrator");
+                egui::ComboBox::from_id_salt("integrator")
+                    .selected_text(p.integrator.cli_name())
+                    .show_ui(ui, |ui| {
+                        for i in Integrator::ALL {
+                            ui.selectable_value(&mut p.integrator, i, i.cli_name());
+                        }
+                    });
+                ui.end_row();
+
+                ui.label("Stiffness k");
+                let slider = egui::Slider::new(&mut state.stiffness, 10.0..=1e6)
+                    .logarithmic(true)
+                    .suffix(" N/m");
+                if ui.add(slider).changed() {
+                    p.stiffness_override = Some(state.stiffness);
+                }
+                ui.end_row();
+                ui.label("");
+                ui.horizontal(|ui| {
+                    match p.stiffness_override {
+                        Some(_) => ui.small("every spring"),
+                        None => ui.small("each spring's own"),
+                    };
+                    if p.stiffness_override.is_some() && ui.small_button("use own").clicked() {
+                        p.stiffness_override = None;
+                    }
+                });
+                ui.end_row();
+
+                ui.label("Damping μ");
+                ui.add(egui::Slider::new(&mut p.damping, 0.0..=100.0).suffix(" 1/s"));
+                ui.end_row();
+
+                ui.label("Time step dt");
+                ui.add(
+                    egui::Slider::new(&mut p.dt, 1e-6..=1.0 / 60.0)
+                        .logarithmic(true)
+                        .custom_formatter(|v, _| format!("{v:.2e}"))
+                        .suffix(" s"),
+                );
+                ui.end_row();
+
+                ui.label("Ground");
+                let mut ground = p.ground.is_some();
+                if ui.checkbox(&mut ground, "y = 0").changed() {
+                    p.ground = ground.then_some(0.0);
+                }
+                ui.end_row();
+            });
+            ui.separator();
+
+            // Live figures
+            let energy = solver.energy(p.gravity);
+            egui::Grid::new("figures").num_columns(2).show(ui, |ui| {
+                let mut row = |name: &str, value: String| {
+                    ui.label(name);
+                    ui.monospace(value);
+                    ui.end_row();
+                };
+                row("Particles", solver.particle_count().to_string());
+                row("Springs", solver.spring_count().to_string());
+                row("Simulated time", format!("{:.4} s", clock.time));
+                row("Steps", clock.steps.to_string());
+                row("Steps / s", format!("{:.0}", stats.steps_per_second));
+                row(
+                    "Real-time factor",
+                    format!("{:.2}×", stats.real_time_factor),
+                );
+                row("Frames / s", format!("{:.0}", stats.fps));
+                row("Energy", format!("{:.6} J", energy.total()));
+                row("  kinetic", format!("{:.6} J", energy.kinetic));
+                row("  gravity", format!("{:.6} J", energy.potential_gravity));
+                row("  springs", format!("{:.6} J", energy.potential_springs));
+            });
+            ui.separator();
+            ui.small(
+                "Click the canvas: add a particle, joined to every particle within the \
+                 scene's click radius.\nG / Space: run or pause.  N: one step.\n\
+                 R: reset.  S: save to saved/.",
+            );
+        });
+    view.panel_width = response.response.rect.width();
+    params.set_if_neq(p);
+    Ok(())
+}
