@@ -4,8 +4,10 @@
 //!   a packed solver, fixed-tick systems in ordered sets.
 //! * [`scene`]: the RON scene format, generators, validation and loading.
 //! * [`runner`]: headless runs of a scene (`hooke run`).
+//! * [`bench`]: measured reports (`hooke bench ...`).
 //! * `ui` (feature `gui`): the desktop app ([`ui::AppPlugin`]).
 
+pub mod bench;
 pub mod runner;
 pub mod scene;
 pub mod sim;

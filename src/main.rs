@@ -44,6 +44,23 @@ enum Command {
     /// Run a scene headless (no window, no GPU) and report.
     #[command(allow_negative_numbers = true)]
     Run(RunArgs),
+    /// Measured reports: work-precision.
+    #[command(subcommand)]
+    Bench(BenchCommand),
+}
+
+#[derive(Subcommand, Debug)]
+enum BenchCommand {
+    /// Error against wall time for every integrator over a sweep of dt; writes CSV, a markdown
+    /// table and SVG/PNG diagrams.
+    WorkPrecision {
+        /// Directory to write into.
+        #[arg(long, default_value = "docs")]
+        out: PathBuf,
+        /// Shorter sweeps (a smoke run, not the committed report).
+        #[arg(long)]
+        quick: bool,
+    },
 }
 
 #[derive(Args, Debug)]
@@ -85,6 +102,9 @@ fn main() -> ExitCode {
     match cli.command {
         None => open_app(cli.app),
         Some(Command::Run(args)) => run(args),
+        Some(Command::Bench(BenchCommand::WorkPrecision { out, quick })) => {
+            work_precision(&out, quick)
+        }
     }
 }
 
@@ -145,6 +165,43 @@ fn run(args: RunArgs) -> ExitCode {
         );
         return ExitCode::from(BLEW_UP);
     }
+    ExitCode::SUCCESS
+}
+
+fn work_precision(out: &std::path::Path, quick: bool) -> ExitCode {
+    use hooke::bench::{plot, work_precision as wp};
+    if let Err(e) = std::fs::create_dir_all(out) {
+        return fail(format!("cannot create {}: {e}", out.display()));
+    }
+    let problems = wp::problems(quick);
+    let report = match wp::run(&problems, |what| eprintln!("  {what}")) {
+        Ok(r) => r,
+        Err(e) => return fail(e),
+    };
+    let command = format!(
+        "hooke bench work-precision{}",
+        if quick { " --quick" } else { "" }
+    );
+    let csv = out.join("work-precision.csv");
+    let md = out.join("work-precision.md");
+    let written = std::fs::write(&csv, wp::csv(&report.rows))
+        .and_then(|()| std::fs::write(&md, wp::markdown(&report, &command)));
+    if let Err(e) = written {
+        return fail(format!(
+            "cannot write the report into {}: {e}",
+            out.display()
+        ));
+    }
+    for p in &problems {
+        let rows: Vec<&wp::Row> = report.rows.iter().filter(|r| r.scene == p.name).collect();
+        let stem = out.join(format!("work-precision-{}", p.name));
+        let title = format!("work-precision: {}", p.name);
+        if let Err(e) = plot::write_diagram(&rows, &title, &stem) {
+            return fail(e);
+        }
+    }
+    println!("{}", wp::markdown(&report, &command));
+    eprintln!("wrote {}, {} and the diagrams", csv.display(), md.display());
     ExitCode::SUCCESS
 }
 

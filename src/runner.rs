@@ -58,7 +58,16 @@ pub struct RunReport {
     pub spring_updates_per_s: f64,
     pub energy_start: f64,
     pub energy_end: f64,
+    /// dt · ω_max at the start (power-iteration estimate of the fastest mode).
+    pub h_omega_max: f64,
+    /// The largest stable dt for this scene and integrator; `null` when unconditional.
+    pub stable_dt: Option<f64>,
+    /// Gershgorin upper bound on ω_max, rad/s.
+    pub omega_max_bound: f64,
     pub finite: bool,
+    /// Mean conjugate-gradient iterations per step (implicit Euler only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cg_iterations_per_step: Option<f64>,
     /// The 1-based step that produced a non-finite value, if one did.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub blowup_step: Option<u64>,
@@ -126,6 +135,7 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
     // Pack the scene without stepping, so the start energy is that of the loaded state.
     sim::pack(world)?;
     let energy_start = world.resource::<Solver>().energy(params.gravity).total();
+    let stability = sim::stability::estimate(world.resource::<Solver>(), &params);
 
     let start = Instant::now();
     let taken = sim::advance(world, steps);
@@ -136,7 +146,7 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
     let status = *world.resource::<SimStatus>();
     let clock = *world.resource::<SimClock>();
     let blowup_step = match status {
-        SimStatus::BlewUp { step, .. } => Some(step),
+        SimStatus::BlewUp { step, .. } | SimStatus::EnergyGrew { step, .. } => Some(step),
         SimStatus::Running => None,
     };
     let springs = solver.spring_count();
@@ -158,7 +168,14 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
         spring_updates_per_s: (springs as f64 * taken as f64) / wall_s.max(1e-12),
         energy_start,
         energy_end,
+        h_omega_max: stability.h_omega,
+        stable_dt: stability
+            .stable_dt
+            .is_finite()
+            .then_some(stability.stable_dt),
+        omega_max_bound: stability.omega_bound,
         finite: blowup_step.is_none() && solver.state_is_finite(),
+        cg_iterations_per_step: solver.scratch.cg_iterations_per_step(),
         blowup_step,
     };
     Ok(Run { report, app })

@@ -203,3 +203,32 @@ fn particles_added_at_run_time_join_the_simulation() {
     assert_eq!(solver(&app).particle_count(), 1);
     assert!(pos(&app, 0).y < 0.7);
 }
+
+/// Switching the integrator of a running simulation needs no reset and makes no jump: the step
+/// after the switch moves every particle about as far as the step before it.
+#[test]
+fn switching_the_integrator_mid_run_is_seamless() {
+    let scene = hooke::scene::presets::resolve("cloth32").unwrap().scene;
+    for to in Integrator::ALL {
+        let mut app = app_with(scene.clone());
+        step(&mut app, 300);
+        let before = solver(&app).x.clone();
+        step(&mut app, 1);
+        let last = solver(&app).x.clone();
+        app.world_mut().resource_mut::<SimParams>().integrator = to;
+        step(&mut app, 1);
+        let after = solver(&app).x.clone();
+        let largest = |a: &[DVec2], b: &[DVec2]| {
+            a.iter()
+                .zip(b)
+                .map(|(p, q)| p.distance(*q))
+                .fold(0.0, f64::max)
+        };
+        let (d_before, d_after) = (largest(&before, &last), largest(&last, &after));
+        assert!(d_before > 0.0);
+        assert!(
+            d_after < 1.5 * d_before,
+            "switching to {to}: the step moved particles {d_after:e} m, the one before {d_before:e} m"
+        );
+    }
+}

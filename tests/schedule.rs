@@ -78,3 +78,36 @@ fn fixed_timestep_loop_matches_direct_stepping() {
     step(&mut direct, steps);
     assert_eq!(solver(&driven).x, solver(&direct).x);
 }
+
+/// When steps cost more than the frame budget, the frame stops after the tick that ran over:
+/// the simulation slows down (the rest of the frame's simulated time is dropped) instead of
+/// the frame running on.
+#[test]
+fn a_frame_over_budget_drops_simulated_time_instead_of_stalling() {
+    let scene = presets::resolve("cloth32").unwrap().scene;
+    let mut app = app_with(scene);
+    app.insert_resource(bevy::time::TimeUpdateStrategy::ManualDuration(
+        Duration::from_millis(100),
+    ));
+    app.world_mut()
+        .resource_mut::<hooke::sim::StepBudget>()
+        .per_frame = Duration::ZERO;
+    app.update(); // the first frame has no time delta
+    let frames = 5;
+    for _ in 0..frames {
+        app.update();
+    }
+    let steps = app.world().resource::<SimClock>().steps;
+    let per_tick = app
+        .world()
+        .resource::<hooke::sim::TickPlan>()
+        .steps_per_tick as u64;
+    // 100 ms of frame at dt = 1e-4 asks for 1000 steps; a zero budget allows one tick.
+    assert_eq!(steps, frames * per_tick, "one tick per frame");
+    assert!(per_tick < 1000);
+    let dropped = app
+        .world()
+        .resource::<hooke::sim::StepBudget>()
+        .dropped_seconds;
+    assert!(dropped > 0.3, "dropped {dropped} s of simulated time");
+}

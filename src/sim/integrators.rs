@@ -29,6 +29,11 @@ pub struct Scratch {
 }
 
 impl Scratch {
+    /// Mean conjugate-gradient iterations per implicit Euler step so far, if any were taken.
+    pub fn cg_iterations_per_step(&self) -> Option<f64> {
+        (self.cg.solves > 0).then(|| self.cg.iterations as f64 / self.cg.solves as f64)
+    }
+
     fn fit(&mut self, n: usize) {
         for b in [
             &mut self.x,

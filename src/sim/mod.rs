@@ -6,7 +6,9 @@ pub mod kernels;
 pub mod params;
 pub mod schedule;
 pub mod solver;
+pub mod stability;
 pub mod sync;
+pub mod watch;
 
 pub use components::*;
 pub use integrators::CgSettings;
@@ -15,3 +17,4 @@ pub use schedule::{
     PhysicsSet, PhysicsStep, SimPlugin, StepBudget, StepSet, TickPlan, advance, pack,
 };
 pub use solver::{Energy, PackedSpring, Solver};
+pub use stability::StabilityEstimate;

@@ -102,6 +102,13 @@ pub enum SimStatus {
     /// A step produced a non-finite position or velocity. The simulation paused itself;
     /// `step` is the 1-based number of the step that did it.
     BlewUp { step: u64, time: f64 },
+    /// The total energy rose past the watch's bound (see [`crate::sim::watch`]); paused.
+    EnergyGrew {
+        step: u64,
+        time: f64,
+        energy: f64,
+        bound: f64,
+    },
 }
 
 /// How many times each pass has run since the scene was loaded: shows which systems a scene

@@ -111,6 +111,9 @@ impl Plugin for SimPlugin {
                     .run_if(simulation_running),
                 sync_from_solver.in_set(PhysicsSet::Writeback),
                 enforce_step_budget.after(PhysicsSet::Writeback),
+                super::watch::watch_energy
+                    .after(PhysicsSet::Writeback)
+                    .run_if(resource_exists::<super::watch::EnergyWatch>),
             ),
         )
         .add_systems(

@@ -4,6 +4,7 @@ mod automation;
 mod draw;
 mod input;
 mod panel;
+mod predict;
 mod stats;
 mod view;
 
@@ -31,6 +32,8 @@ impl Plugin for AppPlugin {
             .init_resource::<view::CanvasView>()
             .init_resource::<stats::LiveStats>()
             .init_resource::<panel::PanelState>()
+            .init_resource::<crate::sim::watch::EnergyWatch>()
+            .init_resource::<crate::sim::StabilityEstimate>()
             .add_systems(Startup, view::spawn_camera)
             .add_systems(Startup, move |world: &mut World| {
                 load_into_world(world, &scene);
@@ -46,6 +49,7 @@ impl Plugin for AppPlugin {
                     input::keyboard,
                     input::add_particle_on_click.after(view::fit_camera),
                     stats::measure,
+                    stats::estimate_stability,
                     automation::drive,
                     draw::attach_particle_meshes,
                     draw::place_particles,

@@ -57,6 +57,7 @@ pub fn side_panel(
     clock: Res<SimClock>,
     status: Res<SimStatus>,
     stats: Res<LiveStats>,
+    stability: Res<StabilityEstimate>,
 ) -> Result {
     let ctx = contexts.ctx_mut()?;
     let mut root = egui::Ui::new(
@@ -123,23 +124,41 @@ pub fn side_panel(
                     commands.queue(save);
                 }
             });
-            match *status {
-                SimStatus::Running if p.paused => ui.label("paused"),
-                SimStatus::Running => ui.label("running"),
-                SimStatus::BlewUp { step, time } => ui.colored_label(
-                    egui::Color32::from_rgb(255, 110, 90),
-                    format!(
-                        "Blew up at step {step} (t = {time:.4} s): a position or velocity \
-                         became infinite or NaN. Lower dt or the stiffness, then Reset."
-                    ),
-                ),
+            let blown = match *status {
+                SimStatus::Running => {
+                    ui.label(if p.paused { "paused" } else { "running" });
+                    None
+                }
+                SimStatus::BlewUp { step, time } => Some(format!(
+                    "Blew up at step {step} (t = {time:.4} s): a position or velocity became \
+                     infinite or NaN."
+                )),
+                SimStatus::EnergyGrew {
+                    step,
+                    time,
+                    energy,
+                    bound,
+                } => Some(format!(
+                    "Unstable at step {step} (t = {time:.4} s): the energy rose to {energy:.3e} J, \
+                     past {bound:.3e} J (10× the energy at the last edit)."
+                )),
             };
+            if let Some(text) = blown {
+                ui.colored_label(RED, text);
+                ui.label("Lower dt or the stiffness, or pick a more stable integrator.");
+                ui.horizontal(|ui| {
+                    if ui.button("⟲ Last good state").clicked() {
+                        commands.queue(|w: &mut World| {
+                            crate::sim::watch::restore_last_good_state(w);
+                        });
+                    }
+                    if ui.button("Reset").clicked() {
+                        commands.queue(reset);
+                    }
+                });
+            }
             if let Some((text, is_error)) = notice.as_ref().and_then(|n| n.0.clone()) {
-                let color = if is_error {
-                    egui::Color32::from_rgb(255, 110, 90)
-                } else {
-                    egui::Color32::from_rgb(140, 200, 140)
-                };
+                let color = if is_error { RED } else { GREEN };
                 ui.colored_label(color, text);
             }
             ui.separator();
@@ -198,6 +217,11 @@ pub fn side_panel(
             });
             ui.separator();
 
+            // Stability and accuracy
+            stability_readout(ui, &stability, p.integrator);
+            accuracy_readout(ui, p.integrator, p.dt, solver.particle_count());
+            ui.separator();
+
             // Live figures
             let energy = solver.energy(p.gravity);
             egui::Grid::new("figures").num_columns(2).show(ui, |ui| {
@@ -231,4 +255,76 @@ pub fn side_panel(
     view.panel_width = response.response.rect.width();
     params.set_if_neq(p);
     Ok(())
+}
+
+const RED: egui::Color32 = egui::Color32::from_rgb(255, 110, 90);
+const AMBER: egui::Color32 = egui::Color32::from_rgb(240, 190, 70);
+const GREEN: egui::Color32 = egui::Color32::from_rgb(140, 200, 140);
+
+/// h·ω_max against the integrator's limit: green below 80 %, amber below 100 %, red past it.
+fn stability_readout(ui: &mut egui::Ui, s: &StabilityEstimate, integrator: Integrator) {
+    let margin = s.margin();
+    let color = if margin < 0.8 {
+        GREEN
+    } else if margin < 1.0 {
+        AMBER
+    } else {
+        RED
+    };
+    let limit = if s.limit.is_finite() {
+        format!("{:.2}", s.limit)
+    } else {
+        "none".into()
+    };
+    ui.horizontal(|ui| {
+        ui.label("Stability");
+        ui.colored_label(
+            color,
+            format!("h·ω_max = {:.3}  (limit {limit})", s.h_omega),
+        );
+    });
+    let stable_dt = if !s.stable_dt.is_finite() {
+        "stable at any dt".to_string()
+    } else if s.stable_dt > 0.0 {
+        format!("stable dt < {:.2e} s", s.stable_dt)
+    } else {
+        "unstable at any dt".to_string()
+    };
+    let note = if integrator == Integrator::ExplicitEuler {
+        " (explicit Euler is stable only through damping)"
+    } else {
+        ""
+    };
+    ui.small(format!(
+        "ω_max ≈ {:.0} rad/s (Gershgorin bound {:.0}); {stable_dt}{note}",
+        s.omega_estimate, s.omega_bound
+    ));
+}
+
+/// The method's order and what the work-precision report measured at this dt.
+fn accuracy_readout(ui: &mut egui::Ui, integrator: Integrator, dt: f64, particles: usize) {
+    use super::predict::{Prediction, order, predict};
+    // Large scenes compare best with the cloth, small ones with the oscillator.
+    let class = if particles > 100 {
+        "cloth32"
+    } else {
+        "oscillator"
+    };
+    let text = match predict(class, integrator, dt) {
+        Prediction::Error {
+            error,
+            extrapolated,
+        } => format!(
+            "order {}; report error at this dt on the {class}: {error:.1e} m{}",
+            order(integrator),
+            if extrapolated { " (extrapolated)" } else { "" }
+        ),
+        Prediction::Unstable => format!(
+            "order {}; the report found it unstable at this dt on the {class}",
+            order(integrator)
+        ),
+        Prediction::Unknown => format!("order {}", order(integrator)),
+    };
+    ui.label("Accuracy");
+    ui.small(text);
 }

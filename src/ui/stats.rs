@@ -1,7 +1,7 @@
 //! Live figures for the panel: steps per second and real-time factor, measured over the last
 //! half second of wall time.
 
-use crate::sim::SimClock;
+use crate::sim::{SimClock, SimParams, Solver, StabilityEstimate, stability};
 use bevy::prelude::*;
 use std::time::Instant;
 
@@ -47,4 +47,25 @@ pub fn measure(clock: Res<SimClock>, mut stats: ResMut<LiveStats>) {
     stats.steps_at_start = clock.steps;
     stats.time_at_start = clock.time;
     stats.frames = 0;
+}
+
+/// Re-estimates the stability limit when the parameters or the scene's shape change, and
+/// every second (the linearisation follows the state).
+pub fn estimate_stability(
+    params: Res<SimParams>,
+    solver: Res<Solver>,
+    mut estimate: ResMut<StabilityEstimate>,
+    mut last: Local<Option<(Instant, usize, usize)>>,
+) {
+    let shape = (solver.particle_count(), solver.spring_count());
+    let due = match *last {
+        None => true,
+        Some((t, n, s)) => {
+            params.is_changed() || (n, s) != shape || t.elapsed().as_secs_f64() > 1.0
+        }
+    };
+    if due {
+        estimate.set_if_neq(stability::estimate(&solver, &params));
+        *last = Some((Instant::now(), shape.0, shape.1));
+    }
 }

@@ -1,0 +1,5 @@
+//! Benchmarks and reports (`hooke bench ...`): measured figures, never test assertions.
+
+pub mod plot;
+pub mod trajectory;
+pub mod work_precision;

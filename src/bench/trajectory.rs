@@ -1,0 +1,79 @@
+//! Runs a scene through the ECS systems and records the state at checkpoints, timing only
+//! the stepping.
+
+use crate::scene::{LoadedScene, Scene, load_into_world};
+use crate::sim::{self, SimParams, SimStatus, Solver};
+use bevy::math::DVec2;
+use std::time::Instant;
+
+/// Positions at evenly spaced checkpoints, the stepping's wall time, and whether every step
+/// stayed finite.
+#[derive(Debug, Clone)]
+pub struct Trajectory {
+    pub checkpoints: Vec<Vec<DVec2>>,
+    pub wall_s: f64,
+    pub steps: u64,
+    pub finite: bool,
+    /// Mean conjugate-gradient iterations per step (implicit Euler), else 0.
+    pub cg_iterations_per_step: f64,
+}
+
+/// Runs `scene` to time `t_end` in steps of the scene's dt, recording `checkpoints` states.
+pub fn run(scene: &Scene, t_end: f64, checkpoints: u64) -> Result<Trajectory, String> {
+    let steps = (t_end / scene.dt).round() as u64;
+    if steps == 0 || steps % checkpoints != 0 {
+        return Err(format!(
+            "dt = {} does not divide T = {t_end} into a multiple of {checkpoints} steps",
+            scene.dt
+        ));
+    }
+    let loaded = LoadedScene::from_scene(scene.clone(), None).map_err(|e| e.to_string())?;
+    let mut app = crate::headless_app();
+    let world = app.world_mut();
+    load_into_world(world, &loaded);
+    world.resource_mut::<SimParams>().paused = false;
+    sim::pack(world)?;
+    let mut out = Trajectory {
+        checkpoints: vec![],
+        wall_s: 0.0,
+        steps: 0,
+        finite: true,
+        cg_iterations_per_step: 0.0,
+    };
+    for _ in 0..checkpoints {
+        let start = Instant::now();
+        let taken = sim::advance(world, steps / checkpoints);
+        out.wall_s += start.elapsed().as_secs_f64();
+        out.steps += taken;
+        out.checkpoints.push(world.resource::<Solver>().x.clone());
+        if *world.resource::<SimStatus>() != SimStatus::Running {
+            out.finite = false;
+            break;
+        }
+    }
+    out.cg_iterations_per_step = world
+        .resource::<Solver>()
+        .scratch
+        .cg_iterations_per_step()
+        .unwrap_or(0.0);
+    Ok(out)
+}
+
+/// The largest distance of any particle from its reference position over all checkpoints;
+/// infinite if the run blew up.
+pub fn max_position_error(run: &Trajectory, reference: &[Vec<DVec2>]) -> f64 {
+    if !run.finite || run.checkpoints.len() != reference.len() {
+        return f64::INFINITY;
+    }
+    let mut worst: f64 = 0.0;
+    for (a, b) in run.checkpoints.iter().zip(reference) {
+        for (p, q) in a.iter().zip(b) {
+            worst = worst.max(p.distance(*q));
+        }
+    }
+    if worst.is_finite() {
+        worst
+    } else {
+        f64::INFINITY
+    }
+}
