@@ -127,8 +127,8 @@ fn pinned_particles_never_move() {
         .0 = DVec2::new(5.0, 5.0);
     step(&mut app, 500);
     let s = solver(&app);
-    for i in 0..32 {
-        assert_eq!(s.x[i], before[i], "pinned particle {i} moved");
+    for (i, &start) in before.iter().enumerate() {
+        assert_eq!(s.x[i], start, "pinned particle {i} moved");
         assert_eq!(s.v[i], DVec2::ZERO, "pinned particle {i} has a velocity");
     }
     assert!(s.x[40].y < 1.0 - 1.0 / 31.0, "free particles fall");
@@ -194,7 +194,10 @@ fn a_stiffness_change_through_the_resource_takes_effect_on_the_next_step() {
 fn particles_added_at_run_time_join_the_simulation() {
     let mut app = app_with(bare_scene(Integrator::SymplecticEuler, 1e-4));
     app.world_mut().resource_mut::<SimParams>().gravity = DVec2::new(0.0, -9.8);
-    let serial = app.world_mut().resource_mut::<hooke::sim::Serials>().next();
+    let serial = app
+        .world_mut()
+        .resource_mut::<hooke::sim::Serials>()
+        .next_serial();
     app.world_mut().spawn((
         Particle { serial },
         hooke::sim::Position(DVec2::new(0.2, 0.7)),

@@ -21,7 +21,7 @@ pub struct Trajectory {
 /// Runs `scene` to time `t_end` in steps of the scene's dt, recording `checkpoints` states.
 pub fn run(scene: &Scene, t_end: f64, checkpoints: u64) -> Result<Trajectory, String> {
     let steps = (t_end / scene.dt).round() as u64;
-    if steps == 0 || steps % checkpoints != 0 {
+    if steps == 0 || !steps.is_multiple_of(checkpoints) {
         return Err(format!(
             "dt = {} does not divide T = {t_end} into a multiple of {checkpoints} steps",
             scene.dt

@@ -142,9 +142,9 @@ pub fn load_into_world(world: &mut World, loaded: &LoadedScene) {
 /// Spawns particles and springs; springs index into the particles given here.
 pub fn spawn_expanded(world: &mut World, expanded: &Expanded) -> Vec<Entity> {
     let mut serials = world.resource_mut::<Serials>();
-    let first = serials.next();
+    let first = serials.next_serial();
     for _ in 1..expanded.particles.len() + expanded.springs.len() {
-        serials.next();
+        serials.next_serial();
     }
     let mut particles = Vec::with_capacity(expanded.particles.len());
     for (i, p) in expanded.particles.iter().enumerate() {

@@ -75,7 +75,7 @@ pub struct Serials {
 }
 
 impl Serials {
-    pub fn next(&mut self) -> u64 {
+    pub fn next_serial(&mut self) -> u64 {
         self.next += 1;
         self.next
     }

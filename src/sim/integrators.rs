@@ -237,8 +237,8 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings) {
         apply_a(cg, &s.mass, &s.springs, h2, &s.inv_mass);
         std::mem::swap(&mut cg.dv, &mut cg.p);
         let pap: f64 = cg.p.iter().zip(&cg.ap).map(|(p, q)| p.dot(*q)).sum();
-        if !(pap > 0.0) {
-            break; // not positive definite along p (or non-finite): stop with what we have
+        if !pap.is_finite() || pap <= 0.0 {
+            break; // not positive definite along p, or non-finite: stop with what we have
         }
         let alpha = rz / pap;
         r2 = 0.0;

@@ -114,7 +114,7 @@ pub fn omega_estimate(s: &Solver, steps: usize) -> f64 {
         }
         alphas.push(alpha);
         let beta = norm(&w);
-        if !(beta > 1e-12 * alpha.abs().max(1e-300)) {
+        if !beta.is_finite() || beta <= 1e-12 * alpha.abs().max(1e-300) {
             break;
         }
         betas.push(beta);
@@ -136,17 +136,17 @@ fn largest_eigenvalue(a: &[f64], b: &[f64]) -> f64 {
     }
     let off = |i: usize| if i < b.len() { b[i].abs() } else { 0.0 };
     let (mut lo, mut hi) = (f64::MAX, f64::MIN);
-    for i in 0..a.len() {
+    for (i, &ai) in a.iter().enumerate() {
         let r = off(i) + if i > 0 { off(i - 1) } else { 0.0 };
-        lo = lo.min(a[i] - r);
-        hi = hi.max(a[i] + r);
+        lo = lo.min(ai - r);
+        hi = hi.max(ai + r);
     }
     // Number of eigenvalues below x.
     let count_below = |x: f64| {
         let (mut count, mut d) = (0, 1.0);
-        for i in 0..a.len() {
+        for (i, &ai) in a.iter().enumerate() {
             let b2 = if i > 0 { b[i - 1] * b[i - 1] } else { 0.0 };
-            d = a[i] - x - if i > 0 { b2 / d } else { 0.0 };
+            d = ai - x - if i > 0 { b2 / d } else { 0.0 };
             if d == 0.0 {
                 d = -1e-300;
             }

@@ -20,13 +20,16 @@ pub struct ParticleLook {
     pinned: Handle<ColorMaterial>,
 }
 
+/// Particles that are new or newly pinned.
+type NewDots<'w, 's> = Query<'w, 's, (Entity, Has<Pinned>), Or<(Added<Particle>, Added<Pinned>)>>;
+
 /// Gives new particles (and re-pinned ones) a dot.
 pub fn attach_particle_meshes(
     mut commands: Commands,
     look: Option<Res<ParticleLook>>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<ColorMaterial>>,
-    new: Query<(Entity, Has<Pinned>), Or<(Added<Particle>, Added<Pinned>)>>,
+    new: NewDots,
     mut unpinned: RemovedComponents<Pinned>,
     particles: Query<(), With<Particle>>,
 ) {

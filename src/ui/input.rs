@@ -1,7 +1,7 @@
 //! Mouse and keyboard: a click adds a particle, G pauses, R resets, S saves, N steps once.
 
 use super::view::CanvasView;
-use crate::scene::{ClickRules, CurrentScene, load_into_world, snapshot, to_ron};
+use crate::scene::{CurrentScene, load_into_world, snapshot, to_ron};
 use crate::sim::*;
 use bevy::math::DVec2;
 use bevy::prelude::*;
@@ -31,15 +31,13 @@ pub fn add_particle_on_click(
     if !view.on_canvas(cursor) {
         return;
     }
-    let rules = scene
-        .and_then(|s| s.0.scene.click)
-        .unwrap_or_else(ClickRules::default);
+    let rules = scene.and_then(|s| s.0.scene.click).unwrap_or_default();
     let at = view.window_to_world(cursor);
     let neighbours = within(&particles, at, rules.radius);
     let first = particles.is_empty();
     let mut particle = commands.spawn((
         Particle {
-            serial: serials.next(),
+            serial: serials.next_serial(),
         },
         Position(at),
         Mass(rules.mass),
@@ -55,7 +53,7 @@ pub fn add_particle_on_click(
             b: other,
             rest,
             stiffness,
-            serial: serials.next(),
+            serial: serials.next_serial(),
         });
     }
 }
