@@ -68,7 +68,8 @@ pub struct RunReport {
     /// Mean conjugate-gradient iterations per step (implicit Euler only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub cg_iterations_per_step: Option<f64>,
-    /// The 1-based step that produced a non-finite value, if one did.
+    /// The 1-based step that produced a non-finite value, if one did. The final state (and
+    /// `--out`) is then the last finite one, at the end of the tick before.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub blowup_step: Option<u64>,
 }

@@ -173,10 +173,28 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &mut Springs
 }
 
 /// Writes the solver's results back into the components, without flagging them as changed.
+/// After a non-finite step it does the opposite: the components still hold the end of the
+/// previous tick, so the solver rolls back to that finite state, and no NaN reaches anything a
+/// user sees (the status says what happened and when).
 pub fn sync_from_solver(
-    solver: Res<Solver>,
+    mut solver: ResMut<Solver>,
     mut particles: Query<(&SolverIndex, &mut Position, &mut Velocity, &mut Force), With<Particle>>,
 ) {
+    if solver.non_finite {
+        for (index, pos, vel, _) in &particles {
+            let i = index.0 as usize;
+            if i < solver.x.len() {
+                solver.x[i] = pos.0;
+                solver.v[i] = if solver.inv_mass[i] == 0.0 {
+                    DVec2::ZERO
+                } else {
+                    vel.0
+                };
+            }
+        }
+        solver.non_finite = false;
+        return;
+    }
     for (index, mut pos, mut vel, mut force) in &mut particles {
         let i = index.0 as usize;
         if i < solver.x.len() {
