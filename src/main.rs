@@ -61,6 +61,19 @@ enum BenchCommand {
         #[arg(long)]
         quick: bool,
     },
+    /// Largest stable dt per hard scene and integrator (bisection) against the theoretical
+    /// limit, and the energy change at half that dt; writes CSV and a markdown table.
+    Stability {
+        /// Directory to write into.
+        #[arg(long, default_value = "docs")]
+        out: PathBuf,
+        /// Directory of the hard scenes.
+        #[arg(long, default_value = "assets/scenes/hard")]
+        scenes: PathBuf,
+        /// Steps per trial.
+        #[arg(long, default_value_t = 3000)]
+        steps: u64,
+    },
 }
 
 #[derive(Args, Debug)]
@@ -104,6 +117,9 @@ fn main() -> ExitCode {
         Some(Command::Run(args)) => run(args),
         Some(Command::Bench(BenchCommand::WorkPrecision { out, quick })) => {
             work_precision(&out, quick)
+        }
+        Some(Command::Bench(BenchCommand::Stability { out, scenes, steps })) => {
+            stability(&out, &scenes, steps)
         }
     }
 }
@@ -202,6 +218,35 @@ fn work_precision(out: &std::path::Path, quick: bool) -> ExitCode {
     }
     println!("{}", wp::markdown(&report, &command));
     eprintln!("wrote {}, {} and the diagrams", csv.display(), md.display());
+    ExitCode::SUCCESS
+}
+
+fn stability(out: &std::path::Path, scenes: &std::path::Path, steps: u64) -> ExitCode {
+    use hooke::bench::stability as st;
+    let scenes = match st::hard_scenes(scenes) {
+        Ok(s) if !s.is_empty() => s,
+        Ok(_) => return fail(format!("no scene files in {}", scenes.display())),
+        Err(e) => return fail(e),
+    };
+    if steps == 0 {
+        return fail("--steps must be at least 1");
+    }
+    let rows = match st::run(&scenes, steps, |what| eprintln!("  {what}")) {
+        Ok(r) => r,
+        Err(e) => return fail(e),
+    };
+    let command = format!("hooke bench stability --steps {steps}");
+    let md = st::markdown(&rows, &command);
+    let written = std::fs::create_dir_all(out)
+        .and_then(|()| std::fs::write(out.join("stability.csv"), st::csv(&rows)))
+        .and_then(|()| std::fs::write(out.join("stability.md"), &md));
+    if let Err(e) = written {
+        return fail(format!(
+            "cannot write the report into {}: {e}",
+            out.display()
+        ));
+    }
+    println!("{md}");
     ExitCode::SUCCESS
 }
 

@@ -314,14 +314,19 @@ fn enforce_step_budget(mut budget: ResMut<StepBudget>, mut time: ResMut<Time<Fix
 }
 
 /// Runs `steps` steps of the simulation directly, through the same fixed-tick systems the app
-/// runs (sync, step sets, writeback), for headless use: the CLI, benchmarks, tests.
-/// Returns the number of steps taken: fewer when paused or when a step blew up.
+/// runs (sync, step sets, writeback, and the energy watch when present), in ticks of the app's
+/// size ([`TickPlan::target_tick_seconds`] of simulated time), for headless use: the CLI,
+/// benchmarks, tests. Returns the number of steps taken: fewer when paused or when a step blew up.
 pub fn advance(world: &mut World, steps: u64) -> u64 {
-    const MAX_STEPS_PER_TICK: u64 = 10_000;
     let start = world.resource::<SimClock>().steps;
+    let (dt, target) = (
+        world.resource::<SimParams>().dt,
+        world.resource::<TickPlan>().target_tick_seconds,
+    );
+    let per_tick = ((target / dt).round() as u64).clamp(1, 10_000);
     let mut remaining = steps;
     while remaining > 0 {
-        let n = remaining.min(MAX_STEPS_PER_TICK);
+        let n = remaining.min(per_tick);
         world.resource_mut::<TickPlan>().steps_per_tick = n as u32;
         world.run_schedule(FixedMain);
         let taken = world.resource::<SimClock>().steps - start;
