@@ -61,6 +61,19 @@ enum BenchCommand {
         #[arg(long)]
         quick: bool,
     },
+    /// Spring updates per second against scene size (1k to 1M springs), integrator and thread
+    /// count; writes CSV and a markdown table.
+    Perf {
+        /// Directory to write into.
+        #[arg(long, default_value = "docs")]
+        out: PathBuf,
+        /// Thread counts to measure (default: 1 and all cores).
+        #[arg(long, value_delimiter = ',')]
+        threads: Vec<usize>,
+        /// Spring updates per run (sets the number of steps).
+        #[arg(long, default_value_t = 3e7)]
+        budget: f64,
+    },
     /// Largest stable dt per hard scene and integrator (bisection) against the theoretical
     /// limit, and the energy change at half that dt; writes CSV and a markdown table.
     Stability {
@@ -98,6 +111,9 @@ struct RunArgs {
     /// Damping rate μ, 1/s (overrides the scene's).
     #[arg(long)]
     damping: Option<f64>,
+    /// Solver threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
     /// Write the final state as CSV (id,x,y,vx,vy).
     #[arg(long)]
     out: Option<PathBuf>,
@@ -118,6 +134,11 @@ fn main() -> ExitCode {
         Some(Command::Bench(BenchCommand::WorkPrecision { out, quick })) => {
             work_precision(&out, quick)
         }
+        Some(Command::Bench(BenchCommand::Perf {
+            out,
+            threads,
+            budget,
+        })) => perf(&out, threads, budget),
         Some(Command::Bench(BenchCommand::Stability { out, scenes, steps })) => {
             stability(&out, &scenes, steps)
         }
@@ -144,6 +165,7 @@ fn run(args: RunArgs) -> ExitCode {
         dt: args.dt,
         stiffness: args.stiffness,
         damping: args.damping,
+        threads: args.threads,
     };
     let run = match runner::run(&loaded, &overrides, duration) {
         Ok(r) => r,
@@ -218,6 +240,38 @@ fn work_precision(out: &std::path::Path, quick: bool) -> ExitCode {
     }
     println!("{}", wp::markdown(&report, &command));
     eprintln!("wrote {}, {} and the diagrams", csv.display(), md.display());
+    ExitCode::SUCCESS
+}
+
+fn perf(out: &std::path::Path, mut threads: Vec<usize>, budget: f64) -> ExitCode {
+    use hooke::bench::perf;
+    if threads.is_empty() {
+        let all = std::thread::available_parallelism().map_or(1, |n| n.get());
+        threads = if all > 1 { vec![1, all] } else { vec![1] };
+    }
+    if threads.contains(&0) {
+        return fail("--threads must be at least 1");
+    }
+    if !(budget.is_finite() && budget > 0.0) {
+        return fail(format!("--budget must be finite and > 0, got {budget}"));
+    }
+    let (rows, loads) = match perf::run(&perf::WIDTHS, &threads, budget, |w| eprintln!("  {w}")) {
+        Ok(r) => r,
+        Err(e) => return fail(e),
+    };
+    let list: Vec<String> = threads.iter().map(|t| t.to_string()).collect();
+    let command = format!("hooke bench perf --threads {}", list.join(","));
+    let md = perf::markdown(&rows, &loads, &command);
+    let written = std::fs::create_dir_all(out)
+        .and_then(|()| std::fs::write(out.join("perf.csv"), perf::csv(&rows)))
+        .and_then(|()| std::fs::write(out.join("perf.md"), &md));
+    if let Err(e) = written {
+        return fail(format!(
+            "cannot write the report into {}: {e}",
+            out.display()
+        ));
+    }
+    println!("{md}");
     ExitCode::SUCCESS
 }
 

@@ -22,6 +22,8 @@ pub struct Overrides {
     pub dt: Option<f64>,
     pub stiffness: Option<f64>,
     pub damping: Option<f64>,
+    /// Solver threads (default: all cores).
+    pub threads: Option<usize>,
 }
 
 impl Overrides {
@@ -35,6 +37,9 @@ impl Overrides {
         }
         if let Some(mu) = self.damping.filter(|m| !(m.is_finite() && *m >= 0.0)) {
             return Err(format!("--damping must be finite and >= 0, got {mu}"));
+        }
+        if self.threads == Some(0) {
+            return Err("--threads must be at least 1".into());
         }
         Ok(())
     }
@@ -53,6 +58,7 @@ pub struct RunReport {
     pub sim_time: f64,
     pub particles: usize,
     pub springs: usize,
+    pub threads: usize,
     pub wall_s: f64,
     pub steps_per_s: f64,
     pub spring_updates_per_s: f64,
@@ -107,6 +113,9 @@ impl Run {
 pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> Result<Run, String> {
     overrides.validate()?;
     let mut app = crate::headless_app();
+    if let Some(t) = overrides.threads {
+        app.insert_resource(sim::SolverThreads::new(t)?);
+    }
     let world = app.world_mut();
     load_into_world(world, loaded);
     {
@@ -164,6 +173,7 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
         sim_time: clock.time,
         particles: solver.particle_count(),
         springs,
+        threads: world.resource::<sim::SolverThreads>().threads(),
         wall_s,
         steps_per_s: taken as f64 / wall_s.max(1e-12),
         spring_updates_per_s: (springs as f64 * taken as f64) / wall_s.max(1e-12),

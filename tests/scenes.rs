@@ -189,3 +189,31 @@ fn a_saved_scene_loads_back_unchanged() {
     assert_eq!(solver(&again).x, solver(&app).x);
     assert_eq!(solver(&again).v, solver(&app).v);
 }
+
+#[test]
+fn the_spatial_grid_finds_exactly_the_particles_within_the_radius() {
+    use bevy::math::DVec2;
+    use hooke::sim::grid::SpatialGrid;
+    // A deterministic scatter, queried at many points against a brute-force scan.
+    let points: Vec<DVec2> = (0..2000u64)
+        .map(|i| {
+            let h = |k: u64| {
+                ((i * 2 + k).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 11) as f64 / (1u64 << 53) as f64
+            };
+            DVec2::new(h(0) * 1.2 - 0.1, h(1) * 1.2 - 0.1)
+        })
+        .collect();
+    let r = 0.15;
+    let mut grid = SpatialGrid::new(r);
+    for (i, p) in points.iter().enumerate() {
+        grid.insert(*p, i);
+    }
+    for q in points.iter().step_by(37) {
+        let mut found: Vec<usize> = grid.within(*q, r).into_iter().map(|(i, _)| i).collect();
+        found.sort_unstable();
+        let expected: Vec<usize> = (0..points.len())
+            .filter(|&i| points[i].distance(*q) <= r)
+            .collect();
+        assert_eq!(found, expected);
+    }
+}

@@ -1,5 +1,6 @@
 //! Benchmarks and reports (`hooke bench ...`): measured figures, never test assertions.
 
+pub mod perf;
 pub mod plot;
 pub mod stability;
 pub mod trajectory;

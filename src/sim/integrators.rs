@@ -11,9 +11,11 @@
 //! | RK4 | 4 | v0 + dt/6 (a1 + 2a2 + 2a3 + a4) | (v0 + 2 v2 + 2 v3 + v4)/6 |
 //! | implicit Euler | 1 + CG | (M − dt² K) Δv = dt (f0 + dt K v0) | v1 (after damping and contact) |
 //!
-//! with a = f/m, and a = 0 for pinned particles (inverse mass 0).
+//! with a = f/m, and a = 0 for pinned particles (inverse mass 0). The Euler methods' velocity
+//! update is the plain kick `v += dt f/m` ([`super::kernels::kick`]), run by the schedule.
 
-use super::kernels::{accumulate_spring_forces, apply_gravity};
+use super::kernels::apply_gravity;
+use super::parallel::{SolverThreads, SpringBuffers};
 use super::solver::{PackedSpring, Solver};
 use bevy::math::DVec2;
 
@@ -48,24 +50,21 @@ impl Scratch {
 }
 
 /// f(x) = m g + Σ spring forces.
-fn forces(f: &mut [DVec2], x: &[DVec2], mass: &[f64], springs: &[PackedSpring], g: DVec2) {
+fn forces(
+    threads: &SolverThreads,
+    buffers: &mut SpringBuffers,
+    f: &mut [DVec2],
+    x: &[DVec2],
+    mass: &[f64],
+    springs: &[PackedSpring],
+    g: DVec2,
+) {
     apply_gravity(f, mass, g);
-    accumulate_spring_forces(f, x, springs);
-}
-
-/// Explicit Euler: keeps v0 as the drift velocity, then v += dt a0.
-pub fn explicit_euler(s: &mut Solver, dt: f64) {
-    s.drift.copy_from_slice(&s.v);
-    super::kernels::kick(&mut s.v, &s.f, &s.inv_mass, dt);
-}
-
-/// Symplectic Euler: v += dt a0 (the drift velocity is v itself).
-pub fn symplectic_euler(s: &mut Solver, dt: f64) {
-    super::kernels::kick(&mut s.v, &s.f, &s.inv_mass, dt);
+    super::parallel::accumulate_spring_forces(threads, buffers, f, x, springs);
 }
 
 /// Velocity Verlet, kick-drift-kick, with a second force evaluation at x0 + dt v½.
-pub fn velocity_verlet(s: &mut Solver, dt: f64, gravity: DVec2) {
+pub fn velocity_verlet(s: &mut Solver, dt: f64, gravity: DVec2, threads: &SolverThreads) {
     let n = s.x.len();
     s.scratch.fit(n);
     let half = 0.5 * dt;
@@ -75,14 +74,17 @@ pub fn velocity_verlet(s: &mut Solver, dt: f64, gravity: DVec2) {
         s.scratch.x[i] = s.x[i] + v_half * dt;
     }
     let sc = &mut s.scratch;
-    forces(&mut sc.f, &sc.x, &s.mass, &s.springs, gravity);
+    let buffers = &mut s.spring_buffers;
+    forces(
+        threads, buffers, &mut sc.f, &sc.x, &s.mass, &s.springs, gravity,
+    );
     for i in 0..n {
         s.v[i] = s.drift[i] + sc.f[i] * (half * s.inv_mass[i]);
     }
 }
 
 /// Classic RK4 on x' = v, v' = f(x)/m.
-pub fn rk4(s: &mut Solver, dt: f64, gravity: DVec2) {
+pub fn rk4(s: &mut Solver, dt: f64, gravity: DVec2, threads: &SolverThreads) {
     let n = s.x.len();
     s.scratch.fit(n);
     let sc = &mut s.scratch;
@@ -101,7 +103,15 @@ pub fn rk4(s: &mut Solver, dt: f64, gravity: DVec2) {
             sc.x[i] = s.x[i] + kx * (c * dt);
             sc.stage_v[i] = s.v[i] + ka * (c * dt);
         }
-        forces(&mut sc.f, &sc.x, &s.mass, &s.springs, gravity);
+        forces(
+            threads,
+            &mut s.spring_buffers,
+            &mut sc.f,
+            &sc.x,
+            &s.mass,
+            &s.springs,
+            gravity,
+        );
         for i in 0..n {
             sc.f[i] *= s.inv_mass[i];
             sc.sum_u[i] += sc.stage_v[i] * w;

@@ -1,8 +1,10 @@
 //! The simulation: data model, parameters, packed solver, kernels and schedule.
 
 pub mod components;
+pub mod grid;
 pub mod integrators;
 pub mod kernels;
+pub mod parallel;
 pub mod params;
 pub mod schedule;
 pub mod solver;
@@ -12,6 +14,7 @@ pub mod watch;
 
 pub use components::*;
 pub use integrators::CgSettings;
+pub use parallel::SolverThreads;
 pub use params::*;
 pub use schedule::{
     PhysicsSet, PhysicsStep, SimPlugin, StepBudget, StepSet, TickPlan, advance, pack,

@@ -7,6 +7,7 @@
 
 use super::integrators::{self, CgSettings};
 use super::kernels;
+use super::parallel::{self, SolverThreads};
 use super::params::*;
 use super::solver::Solver;
 use super::sync::{sync_from_solver, sync_into_solver};
@@ -14,6 +15,7 @@ use bevy::app::{FixedMain, RunFixedMainLoop, RunFixedMainLoopSystems};
 use bevy::ecs::schedule::{ScheduleLabel, SingleThreadedExecutor};
 use bevy::prelude::*;
 use bevy::time::Fixed;
+use rayon::prelude::*;
 use std::time::{Duration, Instant};
 
 /// The sets of a fixed tick, in `FixedUpdate`, in this order.
@@ -96,6 +98,7 @@ impl Plugin for SimPlugin {
             .init_resource::<TickPlan>()
             .init_resource::<StepBudget>()
             .init_resource::<CgSettings>()
+            .init_resource::<SolverThreads>()
             .init_resource::<super::components::Serials>();
 
         app.configure_sets(
@@ -187,35 +190,86 @@ pub fn ground_enabled(params: Res<SimParams>) -> bool {
 
 // ---- the passes ----
 
-fn apply_gravity(mut solver: ResMut<Solver>, params: Res<SimParams>, mut n: ResMut<PassCounts>) {
+fn apply_gravity(
+    mut solver: ResMut<Solver>,
+    params: Res<SimParams>,
+    threads: Res<SolverThreads>,
+    mut n: ResMut<PassCounts>,
+) {
     let s = &mut *solver;
-    kernels::apply_gravity(&mut s.f, &s.mass, params.gravity);
+    let g = params.gravity;
+    match threads.chunking(s.springs.len(), s.x.len()) {
+        None => kernels::apply_gravity(&mut s.f, &s.mass, g),
+        Some((pool, ch)) => pool.install(|| {
+            (s.f.par_chunks_mut(ch).zip(s.mass.par_chunks(ch)))
+                .for_each(|(f, m)| kernels::apply_gravity(f, m, g));
+        }),
+    }
     n.gravity += 1;
 }
 
-fn accumulate_spring_forces(mut solver: ResMut<Solver>, mut n: ResMut<PassCounts>) {
+fn accumulate_spring_forces(
+    mut solver: ResMut<Solver>,
+    threads: Res<SolverThreads>,
+    mut n: ResMut<PassCounts>,
+) {
     let s = &mut *solver;
-    kernels::accumulate_spring_forces(&mut s.f, &s.x, &s.springs);
+    parallel::accumulate_spring_forces(&threads, &mut s.spring_buffers, &mut s.f, &s.x, &s.springs);
     n.springs += 1;
 }
 
-fn explicit_euler(mut solver: ResMut<Solver>, params: Res<SimParams>, mut n: ResMut<PassCounts>) {
-    integrators::explicit_euler(&mut solver, params.dt);
+/// v += dt f / m (the Euler methods' velocity update), in parallel chunks when worthwhile.
+fn kick(s: &mut Solver, dt: f64, threads: &SolverThreads) {
+    match threads.chunking(s.springs.len(), s.x.len()) {
+        None => kernels::kick(&mut s.v, &s.f, &s.inv_mass, dt),
+        Some((pool, ch)) => pool.install(|| {
+            (s.v.par_chunks_mut(ch)
+                .zip(s.f.par_chunks(ch))
+                .zip(s.inv_mass.par_chunks(ch)))
+            .for_each(|((v, f), w)| kernels::kick(v, f, w, dt));
+        }),
+    }
+}
+
+fn explicit_euler(
+    mut solver: ResMut<Solver>,
+    params: Res<SimParams>,
+    threads: Res<SolverThreads>,
+    mut n: ResMut<PassCounts>,
+) {
+    let s = &mut *solver;
+    s.drift.copy_from_slice(&s.v);
+    kick(s, params.dt, &threads);
     n.integrate += 1;
 }
 
-fn symplectic_euler(mut solver: ResMut<Solver>, params: Res<SimParams>, mut n: ResMut<PassCounts>) {
-    integrators::symplectic_euler(&mut solver, params.dt);
+fn symplectic_euler(
+    mut solver: ResMut<Solver>,
+    params: Res<SimParams>,
+    threads: Res<SolverThreads>,
+    mut n: ResMut<PassCounts>,
+) {
+    kick(&mut solver, params.dt, &threads);
     n.integrate += 1;
 }
 
-fn velocity_verlet(mut solver: ResMut<Solver>, params: Res<SimParams>, mut n: ResMut<PassCounts>) {
-    integrators::velocity_verlet(&mut solver, params.dt, params.gravity);
+fn velocity_verlet(
+    mut solver: ResMut<Solver>,
+    params: Res<SimParams>,
+    threads: Res<SolverThreads>,
+    mut n: ResMut<PassCounts>,
+) {
+    integrators::velocity_verlet(&mut solver, params.dt, params.gravity, &threads);
     n.integrate += 1;
 }
 
-fn rk4(mut solver: ResMut<Solver>, params: Res<SimParams>, mut n: ResMut<PassCounts>) {
-    integrators::rk4(&mut solver, params.dt, params.gravity);
+fn rk4(
+    mut solver: ResMut<Solver>,
+    params: Res<SimParams>,
+    threads: Res<SolverThreads>,
+    mut n: ResMut<PassCounts>,
+) {
+    integrators::rk4(&mut solver, params.dt, params.gravity, &threads);
     n.integrate += 1;
 }
 
@@ -229,21 +283,48 @@ fn implicit_euler(
     n.integrate += 1;
 }
 
-fn damp_velocity(mut solver: ResMut<Solver>, params: Res<SimParams>, mut n: ResMut<PassCounts>) {
-    kernels::damp(&mut solver.v, params.damping, params.dt);
+fn damp_velocity(
+    mut solver: ResMut<Solver>,
+    params: Res<SimParams>,
+    threads: Res<SolverThreads>,
+    mut n: ResMut<PassCounts>,
+) {
+    let s = &mut *solver;
+    let (mu, dt) = (params.damping, params.dt);
+    match threads.chunking(s.springs.len(), s.x.len()) {
+        None => kernels::damp(&mut s.v, mu, dt),
+        Some((pool, ch)) => pool.install(|| {
+            s.v.par_chunks_mut(ch)
+                .for_each(|v| kernels::damp(v, mu, dt))
+        }),
+    }
     n.damping += 1;
 }
 
-fn ground_contact(mut solver: ResMut<Solver>, params: Res<SimParams>, mut n: ResMut<PassCounts>) {
+fn ground_contact(
+    mut solver: ResMut<Solver>,
+    params: Res<SimParams>,
+    threads: Res<SolverThreads>,
+    mut n: ResMut<PassCounts>,
+) {
     let Some(ground) = params.ground else { return };
     let s = &mut *solver;
-    kernels::ground_contact(&mut s.x, &mut s.v, &s.inv_mass, ground);
+    match threads.chunking(s.springs.len(), s.x.len()) {
+        None => kernels::ground_contact(&mut s.x, &mut s.v, &s.inv_mass, ground),
+        Some((pool, ch)) => pool.install(|| {
+            (s.x.par_chunks_mut(ch)
+                .zip(s.v.par_chunks_mut(ch))
+                .zip(s.inv_mass.par_chunks(ch)))
+            .for_each(|((x, v), w)| kernels::ground_contact(x, v, w, ground));
+        }),
+    }
     n.ground += 1;
 }
 
 fn advance_positions(
     mut solver: ResMut<Solver>,
     params: Res<SimParams>,
+    threads: Res<SolverThreads>,
     mut n: ResMut<PassCounts>,
 ) {
     let s = &mut *solver;
@@ -251,7 +332,17 @@ fn advance_positions(
         Integrator::ExplicitEuler | Integrator::VelocityVerlet | Integrator::Rk4 => &s.drift,
         Integrator::SymplecticEuler | Integrator::ImplicitEuler => &s.v,
     };
-    let finite = kernels::advance(&mut s.x, drift, &s.v, params.dt);
+    let dt = params.dt;
+    let finite = match threads.chunking(s.springs.len(), s.x.len()) {
+        None => kernels::advance(&mut s.x, drift, &s.v, dt),
+        Some((pool, ch)) => pool.install(|| {
+            (s.x.par_chunks_mut(ch)
+                .zip(drift.par_chunks(ch))
+                .zip(s.v.par_chunks(ch)))
+            .map(|((x, u), v)| kernels::advance(x, u, v, dt))
+            .reduce(|| true, |a, b| a & b)
+        }),
+    };
     s.non_finite = !finite;
     n.advance += 1;
 }

@@ -43,6 +43,8 @@ pub struct Solver {
     pub non_finite: bool,
     /// Work buffers of the multi-stage integrators and the implicit solve's counters.
     pub scratch: super::integrators::Scratch,
+    /// Per-thread buffers of the parallel spring pass.
+    pub spring_buffers: super::parallel::SpringBuffers,
 }
 
 impl Solver {

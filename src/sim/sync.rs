@@ -169,6 +169,7 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &mut Springs
         applied_override: None,
         non_finite: false,
         scratch: Default::default(),
+        spring_buffers: Default::default(),
     };
 }
 

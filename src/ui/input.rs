@@ -2,11 +2,19 @@
 
 use super::view::CanvasView;
 use crate::scene::{CurrentScene, load_into_world, snapshot, to_ron};
+use crate::sim::grid::SpatialGrid;
 use crate::sim::*;
-use bevy::math::DVec2;
 use bevy::prelude::*;
 use bevy::window::PrimaryWindow;
 use bevy_egui::input::EguiWantsInput;
+
+/// The particles' positions in a grid, valid while no step ran and no particle came or went.
+pub struct ClickGrid {
+    steps: u64,
+    count: usize,
+    radius: f64,
+    cells: SpatialGrid<Entity>,
+}
 
 /// Left click on the canvas: a particle at the cursor, joined to every particle within the
 /// click radius (rest = current distance).
@@ -21,6 +29,8 @@ pub fn add_particle_on_click(
     params: Res<SimParams>,
     mut serials: ResMut<Serials>,
     particles: Query<(Entity, &Position), With<Particle>>,
+    clock: Res<SimClock>,
+    mut grid: Local<Option<ClickGrid>>,
 ) {
     if !buttons.just_pressed(MouseButton::Left) || egui.wants_any_pointer_input() {
         return;
@@ -33,7 +43,28 @@ pub fn add_particle_on_click(
     }
     let rules = scene.and_then(|s| s.0.scene.click).unwrap_or_default();
     let at = view.window_to_world(cursor);
-    let neighbours = within(&particles, at, rules.radius);
+    // The grid is rebuilt only when particles moved or changed in number since the last click:
+    // building a paused scene click by click costs O(1) per neighbour.
+    let count = particles.iter().len();
+    let stale = grid
+        .as_ref()
+        .is_none_or(|g| (g.steps, g.count, g.radius) != (clock.steps, count, rules.radius));
+    if stale {
+        let mut cells = SpatialGrid::new(rules.radius);
+        for (e, p) in &particles {
+            cells.insert(p.0, e);
+        }
+        *grid = Some(ClickGrid {
+            steps: clock.steps,
+            count,
+            radius: rules.radius,
+            cells,
+        });
+    }
+    let Some(g) = grid.as_mut() else {
+        return;
+    };
+    let neighbours = g.cells.within(at, rules.radius);
     let first = particles.is_empty();
     let mut particle = commands.spawn((
         Particle {
@@ -46,6 +77,8 @@ pub fn add_particle_on_click(
         particle.insert(Pinned);
     }
     let new = particle.id();
+    g.cells.insert(at, new);
+    g.count += 1;
     let stiffness = params.stiffness_override.unwrap_or(rules.stiffness);
     for (other, rest) in neighbours {
         commands.spawn(Spring {
@@ -56,21 +89,6 @@ pub fn add_particle_on_click(
             serial: serials.next_serial(),
         });
     }
-}
-
-/// Particles within `radius` of `at`, with their distance.
-fn within(
-    particles: &Query<(Entity, &Position), With<Particle>>,
-    at: DVec2,
-    radius: f64,
-) -> Vec<(Entity, f64)> {
-    particles
-        .iter()
-        .filter_map(|(e, p)| {
-            let d = p.0.distance(at);
-            (d <= radius).then_some((e, d))
-        })
-        .collect()
 }
 
 /// A message for the panel after a keyboard or button action.

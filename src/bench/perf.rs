@@ -1,0 +1,195 @@
+//! Speed: spring updates per second against scene size, integrator and thread count, on cloths
+//! generated at about 1k, 10k, 100k and 1M springs plus the 256×256 cloth (`hooke bench perf`).
+//! Every run steps the full schedule (sync, force, integrate, damping, ground, advance) of the
+//! cloth with damping and ground on, as `hooke run` does.
+
+use crate::scene::{Generator, LoadedScene, Pin, Scene, load_into_world};
+use crate::sim::{self, Integrator, SimParams, SolverThreads};
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::time::Instant;
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Row {
+    pub scene: String,
+    pub particles: usize,
+    pub springs: usize,
+    pub integrator: String,
+    pub threads: usize,
+    pub steps: u64,
+    pub wall_s: f64,
+    pub spring_updates_per_s: f64,
+    pub ns_per_spring_update: f64,
+}
+
+/// A cloth of `w`×`w` particles with structural and shear springs, pinned along its top row.
+pub fn cloth(w: usize) -> Scene {
+    Scene {
+        generate: vec![Generator::Grid {
+            cols: w,
+            rows: w,
+            min: (0.0, 0.0),
+            max: (1.0, 1.0),
+            mass: 1.0,
+            stiffness: 1e4,
+            shear: true,
+            pin: Pin::First,
+            vel: (0.0, 0.0),
+        }],
+        ..Scene::default()
+    }
+}
+
+/// Cloth widths: about 1k, 10k, 100k and 1M springs, and the 256×256 cloth.
+pub const WIDTHS: [usize; 5] = [17, 51, 159, 256, 501];
+
+/// Relative cost of a step against symplectic Euler's (force evaluations and CG).
+fn cost(i: Integrator) -> f64 {
+    match i {
+        Integrator::ExplicitEuler | Integrator::SymplecticEuler => 1.0,
+        Integrator::VelocityVerlet => 2.0,
+        Integrator::Rk4 => 4.0,
+        Integrator::ImplicitEuler => 6.0,
+    }
+}
+
+/// How long a cloth took to load (validate, expand the generator, spawn, pack).
+#[derive(Debug, Clone)]
+pub struct LoadTime {
+    pub scene: String,
+    pub springs: usize,
+    pub seconds: f64,
+}
+
+/// Runs the table. `budget` = spring updates per run (sets the steps); returns the rows and
+/// the load time of each cloth.
+pub fn run(
+    widths: &[usize],
+    threads: &[usize],
+    budget: f64,
+    mut progress: impl FnMut(&str),
+) -> Result<(Vec<Row>, Vec<LoadTime>), String> {
+    let mut rows = vec![];
+    let mut loads = vec![];
+    for &w in widths {
+        let name = format!("cloth{w}");
+        progress(&format!("{name}: loading"));
+        let start = Instant::now();
+        let loaded = LoadedScene::from_scene(cloth(w), None).map_err(|e| e.to_string())?;
+        let mut app = crate::headless_app();
+        let world = app.world_mut();
+        load_into_world(world, &loaded);
+        world.resource_mut::<SimParams>().paused = false;
+        sim::pack(world)?;
+        let springs = world.resource::<sim::Solver>().spring_count();
+        let particles = world.resource::<sim::Solver>().particle_count();
+        loads.push(LoadTime {
+            scene: name.clone(),
+            springs,
+            seconds: start.elapsed().as_secs_f64(),
+        });
+        for integrator in Integrator::ALL {
+            for &t in threads {
+                world.insert_resource(SolverThreads::new(t)?);
+                world.resource_mut::<SimParams>().integrator = integrator;
+                let steps =
+                    (budget / (springs as f64 * cost(integrator))).clamp(10.0, 50_000.0) as u64;
+                progress(&format!(
+                    "{name}: {integrator}, {t} thread(s), {steps} steps"
+                ));
+                sim::advance(world, 2); // warm the buffers
+                let start = Instant::now();
+                let taken = sim::advance(world, steps);
+                let wall_s = start.elapsed().as_secs_f64();
+                let updates = springs as f64 * taken as f64;
+                rows.push(Row {
+                    scene: name.clone(),
+                    particles,
+                    springs,
+                    integrator: integrator.cli_name().to_string(),
+                    threads: t,
+                    steps: taken,
+                    wall_s,
+                    spring_updates_per_s: updates / wall_s,
+                    ns_per_spring_update: wall_s * 1e9 / updates,
+                });
+            }
+        }
+    }
+    Ok((rows, loads))
+}
+
+pub fn csv(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "scene,particles,springs,integrator,threads,steps,wall_s,spring_updates_per_s,ns_per_spring_update\n",
+    );
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{:.6},{:.0},{:.3}",
+            r.scene,
+            r.particles,
+            r.springs,
+            r.integrator,
+            r.threads,
+            r.steps,
+            r.wall_s,
+            r.spring_updates_per_s,
+            r.ns_per_spring_update
+        );
+    }
+    s
+}
+
+pub fn markdown(rows: &[Row], loads: &[LoadTime], command: &str) -> String {
+    let mut s = String::from("# Performance\n\n");
+    let _ = writeln!(
+        s,
+        "Made by `{command}`. Million spring updates per second (springs × steps / wall time) \
+         for the full step schedule on cloths with damping and ground on; f64. A multi-stage \
+         method updates each spring several times a step (Verlet 2, RK4 4, implicit Euler 1 \
+         plus its CG products), and is counted once per step here.\n"
+    );
+    let mut threads: Vec<usize> = rows.iter().map(|r| r.threads).collect();
+    threads.sort_unstable();
+    threads.dedup();
+    let _ = write!(s, "| cloth | springs | integrator |");
+    for t in &threads {
+        let _ = write!(s, " {t} thread{} (M/s) |", if *t == 1 { "" } else { "s" });
+    }
+    let _ = write!(s, "\n| --- | ---: | --- |");
+    for _ in &threads {
+        let _ = write!(s, " ---: |");
+    }
+    s.push('\n');
+    let mut keys: Vec<(&str, usize, &str)> = rows
+        .iter()
+        .map(|r| (r.scene.as_str(), r.springs, r.integrator.as_str()))
+        .collect();
+    keys.dedup();
+    for (scene, springs, integrator) in keys {
+        let _ = write!(s, "| {scene} | {springs} | {integrator} |");
+        for t in &threads {
+            let v = rows
+                .iter()
+                .find(|r| r.scene == scene && r.integrator == integrator && r.threads == *t)
+                .map_or("".into(), |r| {
+                    format!("{:.1}", r.spring_updates_per_s / 1e6)
+                });
+            let _ = write!(s, " {v} |");
+        }
+        s.push('\n');
+    }
+    let _ = writeln!(
+        s,
+        "\nLoading (validate, expand the generator, spawn the entities, pack the solver):\n"
+    );
+    for l in loads {
+        let _ = writeln!(
+            s,
+            "- {} ({} springs): {:.2} s",
+            l.scene, l.springs, l.seconds
+        );
+    }
+    s
+}

@@ -1,0 +1,57 @@
+//! A uniform hash grid for "every particle within r of p" queries (adding a particle by click):
+//! with cells of side r a query visits 3×3 cells, O(1) per neighbour instead of a scan of every
+//! particle.
+
+use bevy::math::DVec2;
+use bevy::platform::collections::HashMap;
+
+#[derive(Debug, Clone)]
+pub struct SpatialGrid<T> {
+    cell: f64,
+    cells: HashMap<(i64, i64), Vec<(DVec2, T)>>,
+}
+
+impl<T: Copy> SpatialGrid<T> {
+    /// An empty grid for queries of radius up to `cell`.
+    pub fn new(cell: f64) -> Self {
+        SpatialGrid {
+            cell: if cell.is_finite() && cell > 0.0 {
+                cell
+            } else {
+                1.0
+            },
+            cells: HashMap::default(),
+        }
+    }
+
+    fn key(&self, p: DVec2) -> (i64, i64) {
+        (
+            (p.x / self.cell).floor() as i64,
+            (p.y / self.cell).floor() as i64,
+        )
+    }
+
+    pub fn insert(&mut self, p: DVec2, item: T) {
+        if p.is_finite() {
+            self.cells.entry(self.key(p)).or_default().push((p, item));
+        }
+    }
+
+    /// Every item within `radius` (≤ the cell size) of `at`, with its distance.
+    pub fn within(&self, at: DVec2, radius: f64) -> Vec<(T, f64)> {
+        let (cx, cy) = self.key(at);
+        let reach = (radius / self.cell).ceil().max(1.0) as i64;
+        let mut out = vec![];
+        for x in cx - reach..=cx + reach {
+            for y in cy - reach..=cy + reach {
+                for &(p, item) in self.cells.get(&(x, y)).into_iter().flatten() {
+                    let d = p.distance(at);
+                    if d <= radius {
+                        out.push((item, d));
+                    }
+                }
+            }
+        }
+        out
+    }
+}
