@@ -235,4 +235,46 @@ fn app_starts_draws_and_accepts_clicks() {
     let (r, g, b) = pixel(&shot, ox + 640, oy + 400);
     assert!((r, g, b) != (0, 0, 0), "the window shows something");
     drop(app);
+
+    // A scene loaded at start-up gets its dots too: the rope's pinned end is drawn, in orange.
+    let report = dir.join("rope.json");
+    let app = Command::new(env!("CARGO_BIN_EXE_hooke"))
+        .args(["--scene", "rope", "--exit-after", "300", "--report"])
+        .arg(&report)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env("DISPLAY", &display)
+        .env("WGPU_BACKEND", "vulkan")
+        .env_remove("WAYLAND_DISPLAY")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("the app starts");
+    let _app = Killed(app);
+    wait_for("the rope's first frames", Duration::from_secs(180), || {
+        status(&report).is_some_and(|s| s["fps"].as_f64().unwrap_or(0.0) > 0.0)
+    });
+    std::thread::sleep(Duration::from_secs(1));
+    let window = xdotool(&display, &["search", "--name", "^hooke"]);
+    let window = window
+        .lines()
+        .next()
+        .expect("a window named hooke")
+        .to_string();
+    let view = status(&report).unwrap()["view"].clone();
+    let shot = dir.join("rope.png");
+    assert!(
+        Command::new("import")
+            .args(["-window", &window])
+            .arg(&shot)
+            .env("DISPLAY", &display)
+            .status()
+            .unwrap()
+            .success()
+    );
+    let (wx, wy) = to_window(&view, 0.3, 0.9);
+    let (r, g, b) = pixel(&shot, wx, wy);
+    assert!(
+        r > 200 && g > 120 && b < 120,
+        "no pinned dot at the rope's end: {r},{g},{b}"
+    );
 }

@@ -260,3 +260,42 @@ fn a_nearly_collinear_network() {
         }
     }
 }
+
+/// The energy watch sees an unstable run before any value turns non-finite, and the last good
+/// state brings the simulation back, finite and runnable.
+#[test]
+fn the_energy_watch_stops_a_blow_up_early_and_the_last_good_state_restores_it() {
+    let mut scene = hooke::scene::presets::resolve("cloth32").unwrap().scene;
+    scene.integrator = Integrator::ExplicitEuler;
+    scene.damping = 0.0;
+    scene.dt = 1e-3;
+    let mut app = app_with(scene);
+    app.insert_resource(EnergyWatch::default());
+    hooke::sim::advance(app.world_mut(), 5000);
+    let status = *app.world().resource::<SimStatus>();
+    let SimStatus::EnergyGrew {
+        step,
+        energy,
+        bound,
+        ..
+    } = status
+    else {
+        panic!("expected the energy watch to stop it, got {status:?}");
+    };
+    assert!(energy > bound && energy.is_finite());
+    assert!(app.world().resource::<SimParams>().paused);
+    assert!(hooke::sim::watch::restore_last_good_state(app.world_mut()));
+    assert_eq!(*app.world().resource::<SimStatus>(), SimStatus::Running);
+    let clock = *app.world().resource::<hooke::sim::SimClock>();
+    assert!(
+        clock.steps < step,
+        "back before the blow-up: {} vs {step}",
+        clock.steps
+    );
+    // The restored state reaches the solver on the next tick, and is finite and runnable.
+    app.world_mut().resource_mut::<SimParams>().paused = false;
+    hooke::sim::advance(app.world_mut(), 1);
+    assert!(solver(&app).state_is_finite());
+    let g = app.world().resource::<SimParams>().gravity;
+    assert!(solver(&app).energy(g).total() < bound);
+}

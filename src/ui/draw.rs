@@ -13,7 +13,7 @@ const PINNED: Color = Color::srgb(1.0, 0.75, 0.2);
 /// Particle dot radius, in logical pixels.
 const DOT_PX: f32 = 3.5;
 
-#[derive(Resource)]
+/// The dot's mesh and materials, shared by every particle.
 pub struct ParticleLook {
     mesh: Handle<Mesh>,
     free: Handle<ColorMaterial>,
@@ -26,21 +26,20 @@ type NewDots<'w, 's> = Query<'w, 's, (Entity, Has<Pinned>), Or<(Added<Particle>,
 /// Gives new particles (and re-pinned ones) a dot.
 pub fn attach_particle_meshes(
     mut commands: Commands,
-    look: Option<Res<ParticleLook>>,
+    mut look: Local<Option<ParticleLook>>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<ColorMaterial>>,
     new: NewDots,
     mut unpinned: RemovedComponents<Pinned>,
     particles: Query<(), With<Particle>>,
 ) {
-    let Some(look) = look else {
-        commands.insert_resource(ParticleLook {
-            mesh: meshes.add(Circle::new(1.0)),
-            free: materials.add(ColorMaterial::from_color(PARTICLE)),
-            pinned: materials.add(ColorMaterial::from_color(PINNED)),
-        });
-        return; // the dots are attached next frame, once the look exists
-    };
+    // Made on the first run, in the same run: returning early would miss the particles a scene
+    // spawned at startup (their `Added` is seen only once).
+    let look = look.get_or_insert_with(|| ParticleLook {
+        mesh: meshes.add(Circle::new(1.0)),
+        free: materials.add(ColorMaterial::from_color(PARTICLE)),
+        pinned: materials.add(ColorMaterial::from_color(PINNED)),
+    });
     let unpinned: Vec<Entity> = unpinned.read().filter(|e| particles.contains(*e)).collect();
     let all = new.iter().chain(unpinned.into_iter().map(|e| (e, false)));
     for (e, pinned) in all {

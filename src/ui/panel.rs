@@ -84,6 +84,7 @@ pub fn side_panel(
         .resizable(false)
         .exact_size(290.0)
         .show(&mut root, |ui| {
+            egui::ScrollArea::vertical().show(ui, |ui| {
             ui.add_space(6.0);
             ui.heading("hooke");
             ui.label("2D mass-spring simulator");
@@ -251,6 +252,7 @@ pub fn side_panel(
                  scene's click radius.\nG / Space: run or pause.  N: one step.\n\
                  R: reset.  S: save to saved/.",
             );
+            });
         });
     view.panel_width = response.response.rect.width();
     params.set_if_neq(p);
