@@ -220,16 +220,6 @@ fn work_precision(out: &std::path::Path, quick: bool) -> ExitCode {
         "hooke bench work-precision{}",
         if quick { " --quick" } else { "" }
     );
-    let csv = out.join("work-precision.csv");
-    let md = out.join("work-precision.md");
-    let written = std::fs::write(&csv, wp::csv(&report.rows))
-        .and_then(|()| std::fs::write(&md, wp::markdown(&report, &command)));
-    if let Err(e) = written {
-        return fail(format!(
-            "cannot write the report into {}: {e}",
-            out.display()
-        ));
-    }
     for p in &problems {
         let rows: Vec<&wp::Row> = report.rows.iter().filter(|r| r.scene == p.name).collect();
         let stem = out.join(format!("work-precision-{}", p.name));
@@ -238,9 +228,14 @@ fn work_precision(out: &std::path::Path, quick: bool) -> ExitCode {
             return fail(e);
         }
     }
-    println!("{}", wp::markdown(&report, &command));
-    eprintln!("wrote {}, {} and the diagrams", csv.display(), md.display());
-    ExitCode::SUCCESS
+    let md = wp::markdown(&report, &command);
+    write_report(
+        out,
+        &[
+            ("work-precision.csv", &wp::csv(&report.rows)),
+            ("work-precision.md", &md),
+        ],
+    )
 }
 
 fn perf(out: &std::path::Path, mut threads: Vec<usize>, budget: f64) -> ExitCode {
@@ -255,6 +250,9 @@ fn perf(out: &std::path::Path, mut threads: Vec<usize>, budget: f64) -> ExitCode
     if !(budget.is_finite() && budget > 0.0) {
         return fail(format!("--budget must be finite and > 0, got {budget}"));
     }
+    if let Err(e) = std::fs::create_dir_all(out) {
+        return fail(format!("cannot create {}: {e}", out.display()));
+    }
     let (rows, loads) = match perf::run(&perf::WIDTHS, &threads, budget, |w| eprintln!("  {w}")) {
         Ok(r) => r,
         Err(e) => return fail(e),
@@ -262,17 +260,7 @@ fn perf(out: &std::path::Path, mut threads: Vec<usize>, budget: f64) -> ExitCode
     let list: Vec<String> = threads.iter().map(|t| t.to_string()).collect();
     let command = format!("hooke bench perf --threads {}", list.join(","));
     let md = perf::markdown(&rows, &loads, &command);
-    let written = std::fs::create_dir_all(out)
-        .and_then(|()| std::fs::write(out.join("perf.csv"), perf::csv(&rows)))
-        .and_then(|()| std::fs::write(out.join("perf.md"), &md));
-    if let Err(e) = written {
-        return fail(format!(
-            "cannot write the report into {}: {e}",
-            out.display()
-        ));
-    }
-    println!("{md}");
-    ExitCode::SUCCESS
+    write_report(out, &[("perf.csv", &perf::csv(&rows)), ("perf.md", &md)])
 }
 
 fn stability(out: &std::path::Path, scenes: &std::path::Path, steps: u64) -> ExitCode {
@@ -285,22 +273,37 @@ fn stability(out: &std::path::Path, scenes: &std::path::Path, steps: u64) -> Exi
     if steps == 0 {
         return fail("--steps must be at least 1");
     }
+    if let Err(e) = std::fs::create_dir_all(out) {
+        return fail(format!("cannot create {}: {e}", out.display()));
+    }
     let rows = match st::run(&scenes, steps, |what| eprintln!("  {what}")) {
         Ok(r) => r,
         Err(e) => return fail(e),
     };
     let command = format!("hooke bench stability --steps {steps}");
     let md = st::markdown(&rows, &command);
-    let written = std::fs::create_dir_all(out)
-        .and_then(|()| std::fs::write(out.join("stability.csv"), st::csv(&rows)))
-        .and_then(|()| std::fs::write(out.join("stability.md"), &md));
+    write_report(
+        out,
+        &[("stability.csv", &st::csv(&rows)), ("stability.md", &md)],
+    )
+}
+
+/// Writes a report's files into `out` and prints the last one (its markdown).
+fn write_report(out: &std::path::Path, files: &[(&str, &str)]) -> ExitCode {
+    let written = std::fs::create_dir_all(out).and_then(|()| {
+        files
+            .iter()
+            .try_for_each(|(name, text)| std::fs::write(out.join(name), text))
+    });
     if let Err(e) = written {
         return fail(format!(
             "cannot write the report into {}: {e}",
             out.display()
         ));
     }
-    println!("{md}");
+    if let Some((_, text)) = files.last() {
+        println!("{text}");
+    }
     ExitCode::SUCCESS
 }
 

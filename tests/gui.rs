@@ -119,6 +119,22 @@ fn pixel(png: &Path, x: i64, y: i64) -> (u8, u8, u8) {
     (v[0], v[1], v[2])
 }
 
+/// Starts the app on `scene` with a status file, on software Vulkan.
+fn launch(display: &str, scene: &str, report: &Path, log: &Path) -> Killed {
+    let app = Command::new(env!("CARGO_BIN_EXE_hooke"))
+        .args(["--scene", scene, "--exit-after", "300", "--report"])
+        .arg(report)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env("DISPLAY", display)
+        .env("WGPU_BACKEND", "vulkan")
+        .env_remove("WAYLAND_DISPLAY")
+        .stdout(Stdio::null())
+        .stderr(std::fs::File::create(log).unwrap())
+        .spawn()
+        .expect("the app starts");
+    Killed(app)
+}
+
 #[test]
 fn app_starts_draws_and_accepts_clicks() {
     let in_ci = std::env::var_os("CI").is_some();
@@ -137,18 +153,7 @@ fn app_starts_draws_and_accepts_clicks() {
     let dir = std::env::temp_dir().join(format!("hooke-gui-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let report = dir.join("status.json");
-    let app = Command::new(env!("CARGO_BIN_EXE_hooke"))
-        .args(["--scene", "empty", "--exit-after", "300", "--report"])
-        .arg(&report)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .env("DISPLAY", &display)
-        .env("WGPU_BACKEND", "vulkan")
-        .env_remove("WAYLAND_DISPLAY")
-        .stdout(Stdio::null())
-        .stderr(std::fs::File::create(dir.join("app.log")).unwrap())
-        .spawn()
-        .expect("the app starts");
-    let mut app = Killed(app);
+    let mut app = launch(&display, "empty", &report, &dir.join("app.log"));
     let log = || std::fs::read_to_string(dir.join("app.log")).unwrap_or_default();
 
     // It opens a window and renders frames.
@@ -238,18 +243,7 @@ fn app_starts_draws_and_accepts_clicks() {
 
     // A scene loaded at start-up gets its dots too: the rope's pinned end is drawn, in orange.
     let report = dir.join("rope.json");
-    let app = Command::new(env!("CARGO_BIN_EXE_hooke"))
-        .args(["--scene", "rope", "--exit-after", "300", "--report"])
-        .arg(&report)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .env("DISPLAY", &display)
-        .env("WGPU_BACKEND", "vulkan")
-        .env_remove("WAYLAND_DISPLAY")
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .expect("the app starts");
-    let _app = Killed(app);
+    let _app = launch(&display, "rope", &report, &dir.join("rope.log"));
     wait_for("the rope's first frames", Duration::from_secs(180), || {
         status(&report).is_some_and(|s| s["fps"].as_f64().unwrap_or(0.0) > 0.0)
     });

@@ -17,6 +17,7 @@
 use super::kernels::apply_gravity;
 use super::parallel::{SolverThreads, SpringBuffers};
 use super::solver::{PackedSpring, Solver};
+use super::stiffness::{self, Block};
 use bevy::math::DVec2;
 
 /// Buffers the multi-stage methods reuse from step to step.
@@ -151,8 +152,8 @@ pub struct Cg {
     ap: Vec<DVec2>,
     z: Vec<DVec2>,
     diag: Vec<f64>,
-    /// Per spring: the 2×2 stiffness block's coefficients (α, β): K_s = −k (α I + β d̂d̂ᵀ).
-    blocks: Vec<(DVec2, f64, f64)>,
+    /// Per spring: its block of the stiffness matrix at the start of the step.
+    blocks: Vec<Block>,
     pub iterations: u64,
     pub solves: u64,
     pub unconverged: u64,
@@ -171,7 +172,7 @@ impl Cg {
             b.resize(n, DVec2::ZERO);
         }
         self.diag.resize(n, 0.0);
-        self.blocks.resize(springs, (DVec2::ZERO, 0.0, 0.0));
+        self.blocks.reserve(springs);
     }
 }
 
@@ -188,30 +189,17 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings) {
     let h2 = dt * dt;
 
     // Stiffness blocks at x0 and the Jacobi diagonal of A = M − dt² K.
-    for (i, d) in cg.diag.iter_mut().enumerate() {
-        *d = s.mass[i];
-    }
-    for (sp, block) in s.springs.iter().zip(cg.blocks.iter_mut()) {
-        let (a, b) = (sp.a as usize, sp.b as usize);
-        let d = s.x[a] - s.x[b];
-        let l = d.length();
-        if l < super::kernels::MIN_SPRING_LENGTH {
-            *block = (DVec2::ZERO, 0.0, 0.0);
-            continue;
-        }
-        let dir = d / l;
-        let alpha = (1.0 - sp.rest / l).max(0.0);
-        let beta = 1.0 - alpha;
-        *block = (dir, sp.k * alpha, sp.k * beta);
-        // Diagonal of −K_s for either end: k (α + β d̂ₓ²) and k (α + β d̂ᵧ²); averaged.
-        let diag = sp.k * (alpha + beta * 0.5);
-        cg.diag[a] += h2 * diag;
-        cg.diag[b] += h2 * diag;
+    stiffness::blocks(&s.springs, &s.x, &mut cg.blocks);
+    cg.diag.copy_from_slice(&s.mass);
+    for (sp, block) in s.springs.iter().zip(&cg.blocks) {
+        let diag = h2 * block.mean_diagonal();
+        cg.diag[sp.a as usize] += diag;
+        cg.diag[sp.b as usize] += diag;
     }
 
     // b = dt (f0 + dt K v0), zero on pinned particles.
     let free = |i: usize| s.inv_mass[i] != 0.0;
-    neg_k_times(&mut cg.ap, &s.v, &s.springs, &cg.blocks); // ap = −K v0
+    stiffness::apply(&mut cg.ap, &s.v, &s.springs, &cg.blocks); // ap = K v0
     let mut b_norm2 = 0.0;
     for i in 0..n {
         let b = if free(i) {
@@ -278,26 +266,9 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings) {
     }
 }
 
-/// out = −K p, spring by spring: −K_s (p_a − p_b) on a, the opposite on b.
-fn neg_k_times(
-    out: &mut [DVec2],
-    p: &[DVec2],
-    springs: &[PackedSpring],
-    blocks: &[(DVec2, f64, f64)],
-) {
-    out.fill(DVec2::ZERO);
-    for (sp, &(dir, ka, kb)) in springs.iter().zip(blocks) {
-        let (a, b) = (sp.a as usize, sp.b as usize);
-        let dp = p[a] - p[b];
-        let f = dp * ka + dir * (kb * dir.dot(dp));
-        out[a] += f;
-        out[b] -= f;
-    }
-}
-
-/// ap = A dv = M dv − dt² K dv, with pinned rows held at zero.
+/// ap = A dv = M dv + dt² K dv (K the positive semi-definite stiffness), pinned rows held at 0.
 fn apply_a(cg: &mut Cg, mass: &[f64], springs: &[PackedSpring], h2: f64, inv_mass: &[f64]) {
-    neg_k_times(&mut cg.ap, &cg.dv, springs, &cg.blocks);
+    stiffness::apply(&mut cg.ap, &cg.dv, springs, &cg.blocks);
     for i in 0..mass.len() {
         cg.ap[i] = if inv_mass[i] != 0.0 {
             cg.dv[i] * mass[i] + cg.ap[i] * h2

@@ -9,6 +9,7 @@ pub mod params;
 pub mod schedule;
 pub mod solver;
 pub mod stability;
+pub mod stiffness;
 pub mod sync;
 pub mod watch;
 

@@ -13,6 +13,7 @@
 
 use super::params::{Integrator, SimParams};
 use super::solver::Solver;
+use super::stiffness;
 use bevy::math::DVec2;
 use bevy::prelude::*;
 
@@ -60,8 +61,7 @@ pub fn omega_bound(s: &Solver) -> f64 {
 }
 
 /// λ_max(M⁻¹K) by Lanczos on the symmetric M^(−½) K M^(−½), K the spring stiffness
-/// linearised at the current state (the transverse part of compressed springs dropped, so that
-/// K ≥ 0), pinned particles held. The largest Ritz value approaches the truth from below and,
+/// linearised at the current state ([`stiffness`]), pinned particles held. The largest Ritz value approaches the truth from below and,
 /// unlike power iteration, converges in a few dozen steps even where the top of the spectrum is
 /// dense (a cloth's).
 pub fn omega_estimate(s: &Solver, steps: usize) -> f64 {
@@ -70,11 +70,13 @@ pub fn omega_estimate(s: &Solver, steps: usize) -> f64 {
         return 0.0;
     }
     let inv_sqrt_m: Vec<f64> = s.inv_mass.iter().map(|w| w.sqrt()).collect();
+    let mut blocks = vec![];
+    stiffness::blocks(&s.springs, &s.x, &mut blocks);
     let apply = |y: &[DVec2], out: &mut [DVec2], tmp: &mut [DVec2]| {
         for i in 0..n {
             tmp[i] = y[i] * inv_sqrt_m[i];
         }
-        stiffness_times(s, tmp, out);
+        stiffness::apply(out, tmp, &s.springs, &blocks);
         for i in 0..n {
             out[i] *= inv_sqrt_m[i];
         }
@@ -168,25 +170,6 @@ fn largest_eigenvalue(a: &[f64], b: &[f64]) -> f64 {
         }
     }
     hi
-}
-
-/// out = K u (K positive semi-definite: the spring Jacobian, negated).
-fn stiffness_times(s: &Solver, u: &[DVec2], out: &mut [DVec2]) {
-    out.fill(DVec2::ZERO);
-    for sp in &s.springs {
-        let (a, b) = (sp.a as usize, sp.b as usize);
-        let d = s.x[a] - s.x[b];
-        let l = d.length();
-        if l < super::kernels::MIN_SPRING_LENGTH {
-            continue;
-        }
-        let dir = d / l;
-        let alpha = (1.0 - sp.rest / l).max(0.0);
-        let du = u[a] - u[b];
-        let f = (du * alpha + dir * ((1.0 - alpha) * dir.dot(du))) * sp.k;
-        out[a] += f;
-        out[b] -= f;
-    }
 }
 
 /// The integrator's limit on h·ω at this dt and damping (see the module docs).
