@@ -85,6 +85,16 @@ fn xdotool(display: &str, args: &[&str]) -> String {
     String::from_utf8_lossy(&out.stdout).trim().to_string()
 }
 
+/// The id of the app's window.
+fn hooke_window(display: &str) -> String {
+    let found = xdotool(display, &["search", "--name", "^hooke"]);
+    found
+        .lines()
+        .next()
+        .expect("a window named hooke")
+        .to_string()
+}
+
 /// Window coordinates of a world point, from the mapping the app reports.
 fn to_window(view: &serde_json::Value, x: f64, y: f64) -> (i64, i64) {
     let scale = view["scale"].as_f64().unwrap();
@@ -190,12 +200,7 @@ fn app_starts_draws_and_accepts_clicks() {
         }
         status(&report).is_some_and(|s| s["fps"].as_f64().unwrap_or(0.0) > 0.0)
     });
-    let window = xdotool(&display, &["search", "--name", "^hooke"]);
-    let window = window
-        .lines()
-        .next()
-        .expect("a window named hooke")
-        .to_string();
+    let window = hooke_window(&display);
     let s = status(&report).unwrap();
     assert_eq!(s["particles"], 0, "the empty scene starts empty");
     assert_eq!(s["paused"], true, "the assignment's scene starts paused");
@@ -275,12 +280,7 @@ fn app_starts_draws_and_accepts_clicks() {
         status(&report).is_some_and(|s| s["fps"].as_f64().unwrap_or(0.0) > 0.0)
     });
     std::thread::sleep(Duration::from_secs(1));
-    let window = xdotool(&display, &["search", "--name", "^hooke"]);
-    let window = window
-        .lines()
-        .next()
-        .expect("a window named hooke")
-        .to_string();
+    let window = hooke_window(&display);
     let view = status(&report).unwrap()["view"].clone();
     let shot = dir.join("rope.png");
     assert!(

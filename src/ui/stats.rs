@@ -50,7 +50,8 @@ pub fn measure(clock: Res<SimClock>, mut stats: ResMut<LiveStats>) {
 }
 
 /// Re-estimates the stability limit when the parameters or the scene's shape change, and
-/// every second (the linearisation follows the state).
+/// periodically (the linearisation follows the state): every second, and every second per
+/// 50,000 springs on big scenes, where one estimate (60 Lanczos products) costs milliseconds.
 pub fn estimate_stability(
     params: Res<SimParams>,
     solver: Res<Solver>,
