@@ -203,3 +203,57 @@ fn bad_flags() {
         assert_bad_input(&hooke(&args), needle);
     }
 }
+
+/// Every bad-scene case, through the real binary: exit code 2, and stderr names the file and
+/// the problem.
+#[test]
+fn every_bad_scene_case_through_the_cli() {
+    let good = "(gravity: (0.0, -9.8), damping: 10.0, ground: Some(0.0), integrator: SymplecticEuler, \
+                dt: 0.0001, particles: [(pos: (0.5, 0.9), mass: 1.0, pinned: true), \
+                (pos: (0.5, 0.8), mass: 1.0)], springs: [(a: 0, b: 1, stiffness: 10000.0, rest: 0.1)])";
+    let cases: [(&str, &str, &str); 10] = [
+        ("b: 1,", "b: 5,", "springs[0]: b = 5 is out of range"),
+        ("a: 0, b: 1", "a: 1, b: 1", "springs[0]: a and b are both 1"),
+        (
+            "(pos: (0.5, 0.8), mass: 1.0)",
+            "(pos: (0.5, 0.8), mass: 0.0)",
+            "particles[1]: mass must be finite and > 0",
+        ),
+        (
+            "(pos: (0.5, 0.8), mass: 1.0)",
+            "(pos: (0.5, 0.8), mass: NaN)",
+            "particles[1]: mass must be finite and > 0",
+        ),
+        ("dt: 0.0001", "dt: 0.0", "dt: must be finite and > 0"),
+        ("dt: 0.0001", "dt: inf", "dt: must be finite and > 0"),
+        (
+            "stiffness: 10000.0",
+            "stiffness: -1.0",
+            "springs[0]: stiffness must be finite and >= 0",
+        ),
+        (
+            "pos: (0.5, 0.8)",
+            "pos: (0.5, NaN)",
+            "particles[1]: pos must be finite",
+        ),
+        (
+            "gravity: (0.0, -9.8)",
+            "gravity: (inf, -9.8)",
+            "gravity: must be finite",
+        ),
+        ("damping: 10.0,", "damping: 10.0", "Expected comma"),
+    ];
+    for (i, (from, to, needle)) in cases.iter().enumerate() {
+        let text = good.replacen(from, to, 1);
+        assert_ne!(text, good, "case {i} edits the scene");
+        let path = temp(&format!("bad-{i}.ron"));
+        std::fs::write(&path, text).unwrap();
+        let o = hooke(&["run", "--scene", path.to_str().unwrap(), "--steps", "1"]);
+        assert_bad_input(&o, needle);
+        assert!(
+            stderr(&o).contains(path.to_str().unwrap()),
+            "names the file: {}",
+            stderr(&o)
+        );
+    }
+}
