@@ -235,3 +235,30 @@ fn switching_the_integrator_mid_run_is_seamless() {
         );
     }
 }
+
+/// The multi-threaded step gives the single-threaded result, to round-off, for every
+/// integrator (the 80×80 cloth has 25k springs: above the threshold for threads).
+#[test]
+fn two_threads_give_the_one_thread_result() {
+    let scene = hooke::bench::perf::cloth(80);
+    for integrator in Integrator::ALL {
+        let run = |threads: usize| {
+            let mut s = scene.clone();
+            s.integrator = integrator;
+            let mut app = app_with(s);
+            app.insert_resource(hooke::sim::SolverThreads::new(threads).unwrap());
+            step(&mut app, 40);
+            solver(&app).x.clone()
+        };
+        let (one, two) = (run(1), run(2));
+        let worst = one
+            .iter()
+            .zip(&two)
+            .map(|(a, b)| a.distance(*b))
+            .fold(0.0, f64::max);
+        assert!(
+            worst < 1e-12,
+            "{integrator}: threads change positions by {worst:e} m"
+        );
+    }
+}

@@ -1,9 +1,9 @@
 //! Threads for the step's kernels.
 //!
 //! The spring pass evaluates each spring once and scatters without atomics: the packed springs
-//! are split into one contiguous chunk per thread, each thread accumulates its chunk's forces
-//! into a private buffer covering only the particle-index range that chunk touches (for a
-//! row-major cloth, about N/T plus one row), and a parallel pass then adds the buffers into f.
+//! are split into one contiguous chunk per thread; a thread writes f directly for the particles
+//! no other chunk touches and records the rest, which are added after (see
+//! [`accumulate_spring_forces`]).
 //! Per-particle passes split the particle arrays into chunks. Small scenes run serially: below
 //! [`PARALLEL_MIN_SPRINGS`] the cost of waking a thread exceeds the work.
 
@@ -80,14 +80,91 @@ impl SolverThreads {
     }
 }
 
-/// Per-thread force buffers of the spring pass, reused from step to step.
-#[derive(Debug, Default, Clone)]
-pub struct SpringBuffers {
-    /// (first particle index covered, forces)
-    parts: Vec<(usize, Vec<DVec2>)>,
+/// How the spring pass splits its work, cached until the springs or the thread count change.
+#[derive(Debug, Clone, PartialEq)]
+struct Layout {
+    springs: usize,
+    threads: usize,
+    chunk: usize,
+    /// Per chunk, the half-open particle range that no other chunk touches.
+    exclusive: Vec<(usize, usize)>,
 }
 
-/// f += Σ spring forces, on the pool's threads when worthwhile.
+impl Layout {
+    fn new(springs: &[PackedSpring], threads: usize) -> Layout {
+        let chunk = springs.len().div_ceil(threads).max(1);
+        let touched: Vec<(usize, usize)> = springs
+            .chunks(chunk)
+            .map(|c| {
+                c.iter().fold((usize::MAX, 0), |(lo, hi), s| {
+                    let (a, b) = (s.a as usize, s.b as usize);
+                    (lo.min(a).min(b), hi.max(a + 1).max(b + 1))
+                })
+            })
+            .collect();
+        let exclusive = touched
+            .iter()
+            .enumerate()
+            .map(|(t, &(mut lo, mut hi))| {
+                for (j, &(lj, hj)) in touched.iter().enumerate() {
+                    if j == t || lj >= hi || hj <= lo {
+                        continue; // no overlap with what is left
+                    }
+                    if lj <= lo {
+                        lo = hj.min(hi);
+                    } else if hj >= hi {
+                        hi = lj.max(lo);
+                    } else if lj - lo >= hi - hj {
+                        hi = lj; // the other lies inside: keep the larger side
+                    } else {
+                        lo = hj;
+                    }
+                }
+                (lo, hi.max(lo))
+            })
+            .collect();
+        Layout {
+            springs: springs.len(),
+            threads,
+            chunk,
+            exclusive,
+        }
+    }
+}
+
+/// The spring pass's per-thread state, reused from step to step.
+#[derive(Debug, Default, Clone)]
+pub struct SpringBuffers {
+    layout: Option<Layout>,
+    /// Per chunk, the forces on particles outside its exclusive range, applied after.
+    boundary: Vec<Vec<(u32, DVec2)>>,
+}
+
+/// The force array, shared by the threads of the spring pass, each of which writes only the
+/// particles of its own exclusive range.
+struct SharedForces(*mut DVec2);
+// SAFETY: the spring pass hands each thread a disjoint range of indices to write through this
+// pointer; nothing else touches the array until the pass returns.
+unsafe impl Send for SharedForces {}
+unsafe impl Sync for SharedForces {}
+
+impl SharedForces {
+    /// Adds `v` to element `i`.
+    ///
+    /// # Safety
+    /// `i` is in bounds and in the calling thread's exclusive range.
+    unsafe fn add(&self, i: usize, v: DVec2) {
+        // SAFETY: guaranteed by the caller.
+        unsafe { *self.0.add(i) += v };
+    }
+}
+
+/// f += Σ spring forces, each spring evaluated once, on the pool's threads when worthwhile.
+///
+/// The springs are split into one contiguous chunk per thread. A thread adds its forces
+/// straight into f for the particles no other chunk touches (for a row-major cloth, all but
+/// about one row at each end of its chunk) and records the others; the recorded forces are
+/// added after the parallel part. No atomics and no full-size buffers: one parallel region.
 pub fn accumulate_spring_forces(
     threads: &SolverThreads,
     buffers: &mut SpringBuffers,
@@ -99,49 +176,53 @@ pub fn accumulate_spring_forces(
         kernels::accumulate_spring_forces(f, x, springs);
         return;
     };
-    let chunk = springs.len().div_ceil(threads.threads);
-    let chunks: Vec<&[PackedSpring]> = springs.chunks(chunk).collect();
-    buffers.parts.resize_with(chunks.len(), Default::default);
+    let stale = buffers
+        .layout
+        .as_ref()
+        .is_none_or(|l| l.springs != springs.len() || l.threads != threads.threads);
+    if stale {
+        buffers.layout = Some(Layout::new(springs, threads.threads));
+    }
+    let Some(layout) = buffers.layout.as_ref() else {
+        return;
+    };
+    buffers
+        .boundary
+        .resize_with(layout.exclusive.len(), Vec::new);
+    let n = f.len();
+    let out = SharedForces(f.as_mut_ptr());
     pool.install(|| {
-        buffers
-            .parts
-            .par_iter_mut()
-            .zip(chunks.par_iter())
-            .for_each(|((first, buf), chunk)| {
-                let (lo, hi) = chunk.iter().fold((usize::MAX, 0), |(lo, hi), s| {
+        springs
+            .par_chunks(layout.chunk)
+            .zip(layout.exclusive.par_iter())
+            .zip(buffers.boundary.par_iter_mut())
+            .for_each(|((chunk, &(lo, hi)), boundary)| {
+                boundary.clear();
+                let mut add = |i: usize, v: DVec2| {
+                    if i >= lo && i < hi && i < n {
+                        // SAFETY: i < n, and [lo, hi) is this chunk's exclusive range: no other
+                        // thread writes or reads f[i] during this pass.
+                        unsafe { out.add(i, v) };
+                    } else {
+                        boundary.push((i as u32, v));
+                    }
+                };
+                for s in chunk {
                     let (a, b) = (s.a as usize, s.b as usize);
-                    (lo.min(a).min(b), hi.max(a).max(b))
-                });
-                *first = lo;
-                buf.clear();
-                buf.resize(hi + 1 - lo, DVec2::ZERO);
-                for s in *chunk {
-                    let (a, b) = (s.a as usize - lo, s.b as usize - lo);
-                    let d = x[s.a as usize] - x[s.b as usize];
+                    let d = x[a] - x[b];
                     let l = d.length();
                     if l < kernels::MIN_SPRING_LENGTH {
                         continue;
                     }
                     let fa = d * (-s.k * (l - s.rest) / l);
-                    buf[a] += fa;
-                    buf[b] -= fa;
+                    add(a, fa);
+                    add(b, -fa);
                 }
             });
     });
-    // Add the buffers into f, particle chunk by particle chunk (disjoint writes).
-    let parts = &buffers.parts;
-    let n = f.len();
-    let per = n.div_ceil(threads.threads).max(1);
-    pool.install(|| {
-        f.par_chunks_mut(per).enumerate().for_each(|(c, out)| {
-            let base = c * per;
-            for (first, buf) in parts {
-                let lo = base.max(*first);
-                let hi = (base + out.len()).min(first + buf.len());
-                for i in lo..hi {
-                    out[i - base] += buf[i - first];
-                }
-            }
-        });
-    });
+    for boundary in &buffers.boundary {
+        for &(i, v) in boundary {
+            f[i as usize] += v;
+        }
+    }
 }
