@@ -27,3 +27,14 @@ pub fn headless_app() -> App {
     app.add_plugins((MinimalPlugins, SimPlugin));
     app
 }
+
+/// A headless app with the scene loaded, running (not paused) and packed into the solver: ready
+/// to step, and its state readable before the first step.
+pub fn running_app(loaded: &scene::LoadedScene) -> Result<App, String> {
+    let mut app = headless_app();
+    let world = app.world_mut();
+    scene::load_into_world(world, loaded);
+    world.resource_mut::<sim::SimParams>().paused = false;
+    sim::pack(world)?;
+    Ok(app)
+}

@@ -3,7 +3,7 @@
 //! Every run steps the full schedule (sync, force, integrate, damping, ground, advance) of the
 //! cloth with damping and ground on, as `hooke run` does.
 
-use crate::scene::{Generator, LoadedScene, Pin, Scene, load_into_world};
+use crate::scene::{Generator, LoadedScene, Pin, Scene};
 use crate::sim::{self, Integrator, SimParams, SolverThreads};
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -76,11 +76,8 @@ pub fn run(
         progress(&format!("{name}: loading"));
         let start = Instant::now();
         let loaded = LoadedScene::from_scene(cloth(w), None).map_err(|e| e.to_string())?;
-        let mut app = crate::headless_app();
+        let mut app = crate::running_app(&loaded)?;
         let world = app.world_mut();
-        load_into_world(world, &loaded);
-        world.resource_mut::<SimParams>().paused = false;
-        sim::pack(world)?;
         let springs = world.resource::<sim::Solver>().spring_count();
         let particles = world.resource::<sim::Solver>().particle_count();
         loads.push(LoadTime {

@@ -8,7 +8,7 @@
 //! the first edge the trials see. Near its edge an instability grows slowly, so a finite trial
 //! can find a run stable a little past the asymptotic limit (explicit Euler most of all).
 
-use crate::scene::{LoadedScene, Scene, load_into_world, presets};
+use crate::scene::{LoadedScene, Scene, presets};
 use crate::sim::watch::EnergyWatch;
 use crate::sim::{self, Integrator, SimParams, SimStatus, Solver, stability};
 use serde::Serialize;
@@ -44,12 +44,9 @@ fn trial(scene: &Scene, integrator: Integrator, dt: f64, steps: u64) -> Result<T
         ..scene.clone()
     };
     let loaded = LoadedScene::from_scene(scene, None).map_err(|e| e.to_string())?;
-    let mut app = crate::headless_app();
+    let mut app = crate::running_app(&loaded)?;
     let world = app.world_mut();
-    load_into_world(world, &loaded);
     world.insert_resource(EnergyWatch::default());
-    world.resource_mut::<SimParams>().paused = false;
-    sim::pack(world)?;
     let g = world.resource::<SimParams>().gravity;
     let e0 = world.resource::<Solver>().energy(g).total();
     sim::advance(world, steps);
@@ -62,10 +59,8 @@ fn trial(scene: &Scene, integrator: Integrator, dt: f64, steps: u64) -> Result<T
 
 fn theory(scene: &Scene, integrator: Integrator) -> Result<f64, String> {
     let loaded = LoadedScene::from_scene(scene.clone(), None).map_err(|e| e.to_string())?;
-    let mut app = crate::headless_app();
+    let mut app = crate::running_app(&loaded)?;
     let world = app.world_mut();
-    load_into_world(world, &loaded);
-    sim::pack(world)?;
     let mut params = world.resource::<SimParams>().clone();
     params.integrator = integrator;
     Ok(stability::estimate(world.resource::<Solver>(), &params).stable_dt)

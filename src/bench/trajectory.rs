@@ -1,8 +1,8 @@
 //! Runs a scene through the ECS systems and records the state at checkpoints, timing only
 //! the stepping.
 
-use crate::scene::{LoadedScene, Scene, load_into_world};
-use crate::sim::{self, SimParams, SimStatus, Solver};
+use crate::scene::{LoadedScene, Scene};
+use crate::sim::{self, SimStatus, Solver};
 use bevy::math::DVec2;
 use std::time::Instant;
 
@@ -28,11 +28,8 @@ pub fn run(scene: &Scene, t_end: f64, checkpoints: u64) -> Result<Trajectory, St
         ));
     }
     let loaded = LoadedScene::from_scene(scene.clone(), None).map_err(|e| e.to_string())?;
-    let mut app = crate::headless_app();
+    let mut app = crate::running_app(&loaded)?;
     let world = app.world_mut();
-    load_into_world(world, &loaded);
-    world.resource_mut::<SimParams>().paused = false;
-    sim::pack(world)?;
     let mut out = Trajectory {
         checkpoints: vec![],
         wall_s: 0.0,

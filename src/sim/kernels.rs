@@ -16,19 +16,26 @@ pub fn apply_gravity(f: &mut [DVec2], mass: &[f64], gravity: DVec2) {
     }
 }
 
-/// f_a += -k (l - L) d / l and f_b -= the same, with d = x_a - x_b and l = |d|; each spring is
-/// evaluated once. A spring of (near) zero length is skipped.
+/// The force on a spring's end a, -k (l - L) d / l with d = x_a - x_b and l = |d| (end b gets
+/// its negative); `None` for a spring of (near) zero length, whose direction is undefined.
+/// A non-finite length still yields a (non-finite) force, so that a blow-up is seen.
+#[inline]
+pub fn spring_force(s: &PackedSpring, x: &[DVec2]) -> Option<DVec2> {
+    let d = x[s.a as usize] - x[s.b as usize];
+    let l = d.length();
+    if l < MIN_SPRING_LENGTH {
+        return None;
+    }
+    Some(d * (-s.k * (l - s.rest) / l))
+}
+
+/// f_a += the spring force and f_b -= it, each spring evaluated once.
 pub fn accumulate_spring_forces(f: &mut [DVec2], x: &[DVec2], springs: &[PackedSpring]) {
     for s in springs {
-        let (a, b) = (s.a as usize, s.b as usize);
-        let d = x[a] - x[b];
-        let l = d.length();
-        if l < MIN_SPRING_LENGTH {
-            continue;
+        if let Some(fa) = spring_force(s, x) {
+            f[s.a as usize] += fa;
+            f[s.b as usize] -= fa;
         }
-        let fa = d * (-s.k * (l - s.rest) / l);
-        f[a] += fa;
-        f[b] -= fa;
     }
 }
 

@@ -208,15 +208,10 @@ pub fn accumulate_spring_forces(
                     }
                 };
                 for s in chunk {
-                    let (a, b) = (s.a as usize, s.b as usize);
-                    let d = x[a] - x[b];
-                    let l = d.length();
-                    if l < kernels::MIN_SPRING_LENGTH {
-                        continue;
+                    if let Some(fa) = kernels::spring_force(s, x) {
+                        add(s.a as usize, fa);
+                        add(s.b as usize, -fa);
                     }
-                    let fa = d * (-s.k * (l - s.rest) / l);
-                    add(a, fa);
-                    add(b, -fa);
                 }
             });
     });

@@ -74,12 +74,17 @@ pub fn watch_energy(
         return;
     }
     if energy.is_finite() && !solver.non_finite {
-        watch.last_good = Some(GoodState {
-            entities: solver.entities.clone(),
-            x: solver.x.clone(),
-            v: solver.v.clone(),
+        // Every tick: reuse the previous copy's memory rather than allocating anew.
+        let good = watch.last_good.get_or_insert_with(|| GoodState {
+            entities: vec![],
+            x: vec![],
+            v: vec![],
             clock: *clock,
         });
+        good.entities.clone_from(&solver.entities);
+        good.x.clone_from(&solver.x);
+        good.v.clone_from(&solver.v);
+        good.clock = *clock;
     }
 }
 
