@@ -17,7 +17,7 @@
 use super::kernels::apply_gravity;
 use super::parallel::{SolverThreads, SpringBuffers};
 use super::solver::{PackedSpring, Solver};
-use super::stiffness::{self, Block};
+use super::stiffness::{self, Block, Sym2};
 use bevy::math::DVec2;
 
 /// Buffers the multi-stage methods reuse from step to step.
@@ -151,7 +151,8 @@ pub struct Cg {
     p: Vec<DVec2>,
     ap: Vec<DVec2>,
     z: Vec<DVec2>,
-    diag: Vec<f64>,
+    /// Per particle: the inverse of its diagonal block of A (the preconditioner).
+    diag: Vec<Sym2>,
     /// Per spring: its block of the stiffness matrix at the start of the step.
     blocks: Vec<Block>,
     pub iterations: u64,
@@ -171,13 +172,13 @@ impl Cg {
         ] {
             b.resize(n, DVec2::ZERO);
         }
-        self.diag.resize(n, 0.0);
+        self.diag.resize(n, Sym2::default());
         self.blocks.reserve(springs);
     }
 }
 
 /// Backward Euler linearised once per step (one Newton step):
-/// (M − dt² K) Δv = dt (f0 + dt K v0), v1 = v0 + Δv, solved matrix-free by Jacobi-
+/// (M − dt² K) Δv = dt (f0 + dt K v0), v1 = v0 + Δv, solved matrix-free by block-Jacobi-
 /// preconditioned conjugate gradients, warm-started from the previous Δv. K is the spring
 /// Jacobian with the transverse term of compressed springs dropped (coefficient
 /// max(0, 1 − L/l)), which keeps M − dt² K symmetric positive definite. Pinned particles are
@@ -188,13 +189,24 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings) {
     cg.fit(n, s.springs.len());
     let h2 = dt * dt;
 
-    // Stiffness blocks at x0 and the Jacobi diagonal of A = M − dt² K.
+    // Stiffness blocks at x0, and the preconditioner: the inverse of each particle's 2×2
+    // diagonal block of A = M − dt² K (block Jacobi; a particle's springs pull it along their
+    // directions, which a scalar diagonal cannot express).
     stiffness::blocks(&s.springs, &s.x, &mut cg.blocks);
-    cg.diag.copy_from_slice(&s.mass);
+    for (d, &m) in cg.diag.iter_mut().zip(&s.mass) {
+        *d = Sym2::scaled_identity(m);
+    }
     for (sp, block) in s.springs.iter().zip(&cg.blocks) {
-        let diag = h2 * block.mean_diagonal();
-        cg.diag[sp.a as usize] += diag;
-        cg.diag[sp.b as usize] += diag;
+        let k = block.matrix();
+        cg.diag[sp.a as usize].add_scaled(k, h2);
+        cg.diag[sp.b as usize].add_scaled(k, h2);
+    }
+    for (d, &w) in cg.diag.iter_mut().zip(&s.inv_mass) {
+        *d = if w != 0.0 {
+            d.inverse_or_zero()
+        } else {
+            Sym2::default()
+        };
     }
 
     // b = dt (f0 + dt K v0), zero on pinned particles.
@@ -211,47 +223,66 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings) {
         b_norm2 += b.length_squared();
     }
     // r = b − A dv (warm start).
-    for i in 0..n {
-        if !free(i) {
-            cg.dv[i] = DVec2::ZERO;
+    for (dv, &w) in cg.dv.iter_mut().zip(&s.inv_mass) {
+        if w == 0.0 {
+            *dv = DVec2::ZERO;
         }
     }
-    apply_a(cg, &s.mass, &s.springs, h2, &s.inv_mass);
-    for i in 0..n {
-        cg.r[i] = cg.z[i] - cg.ap[i];
+    apply_a(
+        &mut cg.ap,
+        &cg.dv,
+        &cg.blocks,
+        &s.springs,
+        &s.mass,
+        &s.inv_mass,
+        h2,
+    );
+    let mut rz = DVec2::ZERO;
+    for ((((r, z), p), ap), d) in (cg.r.iter_mut().zip(&mut cg.z).zip(&mut cg.p))
+        .zip(&cg.ap)
+        .zip(&cg.diag)
+    {
+        *r = *z - *ap; // z holds b
+        *z = d.times(*r);
+        *p = *z;
+        rz += *r * *z;
     }
     let tol2 = settings.tolerance * settings.tolerance * b_norm2;
-    let mut rz = 0.0;
-    for i in 0..n {
-        cg.z[i] = cg.r[i] / cg.diag[i];
-        cg.p[i] = cg.z[i];
-        rz += cg.r[i].dot(cg.z[i]);
-    }
+    let mut rz = rz.element_sum();
+    let mut r2 = cg.r.iter().map(|r| r.length_squared()).sum::<f64>();
     let mut iterations = 0;
-    let mut r2: f64 = cg.r.iter().map(|r| r.length_squared()).sum();
     while r2 > tol2 && iterations < settings.max_iterations {
-        // ap = A p (A reads p through dv's slot swap).
-        std::mem::swap(&mut cg.dv, &mut cg.p);
-        apply_a(cg, &s.mass, &s.springs, h2, &s.inv_mass);
-        std::mem::swap(&mut cg.dv, &mut cg.p);
-        let pap: f64 = cg.p.iter().zip(&cg.ap).map(|(p, q)| p.dot(*q)).sum();
+        let pap = apply_a(
+            &mut cg.ap,
+            &cg.p,
+            &cg.blocks,
+            &s.springs,
+            &s.mass,
+            &s.inv_mass,
+            h2,
+        );
         if !pap.is_finite() || pap <= 0.0 {
             break; // not positive definite along p, or non-finite: stop with what we have
         }
         let alpha = rz / pap;
-        r2 = 0.0;
-        let mut rz_new = 0.0;
-        for i in 0..n {
-            cg.dv[i] += cg.p[i] * alpha;
-            cg.r[i] -= cg.ap[i] * alpha;
-            cg.z[i] = cg.r[i] / cg.diag[i];
-            r2 += cg.r[i].length_squared();
-            rz_new += cg.r[i].dot(cg.z[i]);
+        // Reductions in two lanes (x and y): a scalar sum is one long chain of additions.
+        let (mut r2_lanes, mut rz_lanes) = (DVec2::ZERO, DVec2::ZERO);
+        for ((((dv, r), z), p), (ap, d)) in (cg.dv.iter_mut().zip(&mut cg.r).zip(&mut cg.z))
+            .zip(&cg.p)
+            .zip(cg.ap.iter().zip(&cg.diag))
+        {
+            *dv += *p * alpha;
+            *r -= *ap * alpha;
+            *z = d.times(*r);
+            r2_lanes += *r * *r;
+            rz_lanes += *r * *z;
         }
+        r2 = r2_lanes.element_sum();
+        let rz_new = rz_lanes.element_sum();
         let beta = rz_new / rz;
         rz = rz_new;
-        for i in 0..n {
-            cg.p[i] = cg.z[i] + cg.p[i] * beta;
+        for (p, z) in cg.p.iter_mut().zip(&cg.z) {
+            *p = *z + *p * beta;
         }
         iterations += 1;
     }
@@ -266,14 +297,26 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings) {
     }
 }
 
-/// ap = A dv = M dv + dt² K dv (K the positive semi-definite stiffness), pinned rows held at 0.
-fn apply_a(cg: &mut Cg, mass: &[f64], springs: &[PackedSpring], h2: f64, inv_mass: &[f64]) {
-    stiffness::apply(&mut cg.ap, &cg.dv, springs, &cg.blocks);
-    for i in 0..mass.len() {
-        cg.ap[i] = if inv_mass[i] != 0.0 {
-            cg.dv[i] * mass[i] + cg.ap[i] * h2
+/// ap = A u = M u + dt² K u (K the positive semi-definite stiffness), pinned rows held at 0.
+/// Returns u · ap.
+fn apply_a(
+    ap: &mut [DVec2],
+    u: &[DVec2],
+    blocks: &[Block],
+    springs: &[PackedSpring],
+    mass: &[f64],
+    inv_mass: &[f64],
+    h2: f64,
+) -> f64 {
+    stiffness::apply(ap, u, springs, blocks);
+    let mut dot = DVec2::ZERO;
+    for (((ap, &u), &m), &w) in ap.iter_mut().zip(u).zip(mass).zip(inv_mass) {
+        *ap = if w != 0.0 {
+            u * m + *ap * h2
         } else {
             DVec2::ZERO
         };
+        dot += u * *ap;
     }
+    dot.element_sum()
 }

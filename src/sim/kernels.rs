@@ -31,10 +31,75 @@ pub fn spring_force(s: &PackedSpring, x: &[DVec2]) -> Option<DVec2> {
 
 /// f_a += the spring force and f_b -= it, each spring evaluated once.
 pub fn accumulate_spring_forces(f: &mut [DVec2], x: &[DVec2], springs: &[PackedSpring]) {
-    for s in springs {
-        if let Some(fa) = spring_force(s, x) {
-            f[s.a as usize] += fa;
-            f[s.b as usize] -= fa;
+    for_each_spring_force(x, springs, |i, v| f[i] += v);
+}
+
+/// Calls `add(i, force)` with every spring's forces on its ends: four springs at a time where
+/// the CPU has AVX (see [`super::wide`]; the same IEEE operations, so the same bits), else one
+/// by one.
+#[inline(always)]
+pub fn for_each_spring_force(x: &[DVec2], springs: &[PackedSpring], add: impl FnMut(usize, DVec2)) {
+    #[cfg(target_arch = "x86_64")]
+    if super::wide::available() {
+        // SAFETY: the CPU has AVX, checked just above.
+        unsafe { super::wide::for_each_spring_force(x, springs, add) };
+        return;
+    }
+    scatter_pairs(springs, |_, s| spring_force(s, x), add);
+}
+
+/// For each spring `k`, `add(a, g)` and `add(b, -g)` with `g = pair(k, spring)` (nothing for
+/// `None`): the scatter of every pairwise quantity (spring forces, the stiffness matrix times a
+/// vector).
+#[inline(always)]
+pub fn scatter_pairs(
+    springs: &[PackedSpring],
+    mut pair: impl FnMut(usize, &PackedSpring) -> Option<DVec2>,
+    mut add: impl FnMut(usize, DVec2),
+) {
+    let mut run = Run::new(springs);
+    for (k, s) in springs.iter().enumerate() {
+        run.push(s, pair(k, s), &mut add);
+    }
+    run.finish(add);
+}
+
+/// The scatter's running sum on a spring's end a.
+///
+/// Consecutive springs that share their end a (the packed springs are sorted by it, see
+/// [`super::sync`]) sum their contributions to a in a register and hand them over once. Adding
+/// each to memory, spring after spring, makes every update wait for the previous one's store.
+pub struct Run {
+    a: usize,
+    on_a: DVec2,
+}
+
+impl Run {
+    #[inline(always)]
+    pub fn new(springs: &[PackedSpring]) -> Run {
+        Run {
+            a: springs.first().map_or(0, |s| s.a as usize),
+            on_a: DVec2::ZERO,
+        }
+    }
+
+    /// Scatters spring `s`'s contribution `g` on a (and −g on b).
+    #[inline(always)]
+    pub fn push(&mut self, s: &PackedSpring, g: Option<DVec2>, add: &mut impl FnMut(usize, DVec2)) {
+        if s.a as usize != self.a {
+            add(self.a, self.on_a);
+            (self.a, self.on_a) = (s.a as usize, DVec2::ZERO);
+        }
+        if let Some(g) = g {
+            self.on_a += g;
+            add(s.b as usize, -g);
+        }
+    }
+
+    #[inline(always)]
+    pub fn finish(self, mut add: impl FnMut(usize, DVec2)) {
+        if self.on_a != DVec2::ZERO {
+            add(self.a, self.on_a);
         }
     }
 }

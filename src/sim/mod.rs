@@ -12,6 +12,7 @@ pub mod stability;
 pub mod stiffness;
 pub mod sync;
 pub mod watch;
+pub mod wide;
 
 pub use components::*;
 pub use integrators::CgSettings;

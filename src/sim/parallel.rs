@@ -198,7 +198,7 @@ pub fn accumulate_spring_forces(
             .zip(buffers.boundary.par_iter_mut())
             .for_each(|((chunk, &(lo, hi)), boundary)| {
                 boundary.clear();
-                let mut add = |i: usize, v: DVec2| {
+                let add = |i: usize, v: DVec2| {
                     if i >= lo && i < hi && i < n {
                         // SAFETY: i < n, and [lo, hi) is this chunk's exclusive range: no other
                         // thread writes or reads f[i] during this pass.
@@ -207,12 +207,7 @@ pub fn accumulate_spring_forces(
                         boundary.push((i as u32, v));
                     }
                 };
-                for s in chunk {
-                    if let Some(fa) = kernels::spring_force(s, x) {
-                        add(s.a as usize, fa);
-                        add(s.b as usize, -fa);
-                    }
-                }
+                kernels::for_each_spring_force(x, chunk, add);
             });
     });
     for boundary in &buffers.boundary {

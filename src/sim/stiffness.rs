@@ -7,7 +7,7 @@
 //! springs so that K stays positive semi-definite. Springs shorter than
 //! [`super::kernels::MIN_SPRING_LENGTH`] contribute nothing.
 
-use super::kernels::MIN_SPRING_LENGTH;
+use super::kernels::{self, MIN_SPRING_LENGTH};
 use super::solver::PackedSpring;
 use bevy::math::DVec2;
 
@@ -39,9 +39,57 @@ impl Block {
         du * self.k_iso + self.dir * (self.k_axial * self.dir.dot(du))
     }
 
-    /// The block's mean diagonal entry, for a scalar Jacobi preconditioner.
-    pub fn mean_diagonal(&self) -> f64 {
-        self.k_iso + 0.5 * self.k_axial
+    /// The block as a matrix.
+    pub fn matrix(&self) -> Sym2 {
+        let (d, a) = (self.dir, self.k_axial);
+        Sym2 {
+            xx: self.k_iso + a * d.x * d.x,
+            xy: a * d.x * d.y,
+            yy: self.k_iso + a * d.y * d.y,
+        }
+    }
+}
+
+/// A symmetric 2×2 matrix.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Sym2 {
+    pub xx: f64,
+    pub xy: f64,
+    pub yy: f64,
+}
+
+impl Sym2 {
+    pub fn scaled_identity(s: f64) -> Sym2 {
+        Sym2 {
+            xx: s,
+            xy: 0.0,
+            yy: s,
+        }
+    }
+
+    pub fn add_scaled(&mut self, other: Sym2, s: f64) {
+        self.xx += s * other.xx;
+        self.xy += s * other.xy;
+        self.yy += s * other.yy;
+    }
+
+    /// The inverse, or zero for a singular matrix (a pinned particle's row, which the solve
+    /// holds at zero anyway).
+    pub fn inverse_or_zero(&self) -> Sym2 {
+        let det = self.xx * self.yy - self.xy * self.xy;
+        if det.is_normal() {
+            Sym2 {
+                xx: self.yy / det,
+                xy: -self.xy / det,
+                yy: self.xx / det,
+            }
+        } else {
+            Sym2::default()
+        }
+    }
+
+    pub fn times(&self, u: DVec2) -> DVec2 {
+        DVec2::new(self.xx * u.x + self.xy * u.y, self.xy * u.x + self.yy * u.y)
     }
 }
 
@@ -54,10 +102,9 @@ pub fn blocks(springs: &[PackedSpring], x: &[DVec2], out: &mut Vec<Block>) {
 /// out = K u.
 pub fn apply(out: &mut [DVec2], u: &[DVec2], springs: &[PackedSpring], blocks: &[Block]) {
     out.fill(DVec2::ZERO);
-    for (s, block) in springs.iter().zip(blocks) {
-        let (a, b) = (s.a as usize, s.b as usize);
-        let f = block.times(u[a] - u[b]);
-        out[a] += f;
-        out[b] -= f;
-    }
+    kernels::scatter_pairs(
+        springs,
+        |k, s| Some(blocks[k].times(u[s.a as usize] - u[s.b as usize])),
+        |i, g| out[i] += g,
+    );
 }

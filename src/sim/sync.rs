@@ -1,8 +1,8 @@
 //! Keeps the packed [`Solver`] in step with the ECS components.
 //!
 //! * Structural changes (a particle or spring added or removed, a particle pinned or unpinned)
-//!   rebuild the packed arrays, ordered by creation serial so results do not depend on
-//!   archetype layout.
+//!   rebuild the packed arrays: particles in creation order, springs by their ends' indices,
+//!   so results do not depend on archetype layout.
 //! * Value edits (a dragged position, a changed mass or spring) are patched in place.
 //! * After the steps, positions, velocities and forces are written back without flagging them
 //!   as changed, so the next sync sees only what users changed.
@@ -107,7 +107,7 @@ pub fn sync_into_solver(
     }
 }
 
-/// Repacks every particle and spring, in creation order. Springs whose endpoints are not both
+/// Repacks every particle and spring. Springs whose endpoints are not both
 /// particles are left out.
 fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &mut Springs) {
     let mut order: Vec<(u64, Entity)> = particles.iter().map(|p| (p.1.serial, p.0)).collect();
@@ -148,7 +148,10 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &mut Springs
             Some((s.serial, e, spring))
         })
         .collect();
-    packed.sort_unstable_by_key(|p| p.0);
+    // Grouped by first end, then second (ties by creation): the spring pass then sums each
+    // particle's run of springs in a register, and repeated second ends lie a few springs
+    // apart, so no update waits on the previous one's store (see `kernels::scatter_pairs`).
+    packed.sort_unstable_by_key(|p| (p.2.a, p.2.b, p.0));
     let mut spring_index: EntityHashMap<u32> = EntityHashMap::default();
     spring_index.extend(packed.iter().enumerate().map(|(i, p)| (p.1, i as u32)));
     for (e, _, mut solver_index) in springs.iter_mut() {

@@ -1,8 +1,15 @@
 //! Drawing: the unit square and ground, springs as lines coloured by strain, particles as dots.
+//!
+//! All springs are one mesh and all dots another, rebuilt from the solver's arrays when they
+//! change: two draw calls whatever the scene's size. (One entity or gizmo line per spring cost
+//! ~400 ms a frame at 64×64; see the README's performance section.)
 //! Positions are f64 in the simulation; f32 only here.
 
 use super::view::CanvasView;
-use crate::sim::{Particle, Pinned, Position, SimParams, Solver};
+use crate::sim::{SimParams, Solver};
+use bevy::asset::RenderAssetUsages;
+use bevy::camera::visibility::NoFrustumCulling;
+use bevy::mesh::{Indices, PrimitiveTopology, VertexAttributeValues};
 use bevy::prelude::*;
 
 pub const BACKGROUND: Color = Color::srgb(0.07, 0.08, 0.10);
@@ -12,74 +19,203 @@ const PARTICLE: Color = Color::srgb(0.95, 0.95, 0.95);
 const PINNED: Color = Color::srgb(1.0, 0.75, 0.2);
 /// Particle dot radius, in logical pixels.
 const DOT_PX: f32 = 3.5;
+/// Half the width of a spring line, in logical pixels.
+const SPRING_HALF_PX: f32 = 0.8;
+/// Corners of a dot: an octagon is round at a few pixels.
+const DOT_SIDES: u32 = 8;
+/// Relative extension drawn in full colour (red stretched, blue compressed).
+const FULL_STRAIN: f32 = 0.05;
 
-/// The dot's mesh and materials, shared by every particle.
-pub struct ParticleLook {
-    mesh: Handle<Mesh>,
-    free: Handle<ColorMaterial>,
-    pinned: Handle<ColorMaterial>,
+/// The two batched meshes.
+#[derive(Resource)]
+pub struct Batches {
+    springs: Handle<Mesh>,
+    dots: Handle<Mesh>,
 }
 
-/// Particles that are new or newly pinned.
-type NewDots<'w, 's> = Query<'w, 's, (Entity, Has<Pinned>), Or<(Added<Particle>, Added<Pinned>)>>;
-
-/// Gives new particles (and re-pinned ones) a dot.
-pub fn attach_particle_meshes(
+/// Spawns the spring and dot meshes, empty, with a white material that the vertex colours tint.
+pub fn spawn_batches(
     mut commands: Commands,
-    mut look: Local<Option<ParticleLook>>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<ColorMaterial>>,
-    new: NewDots,
-    mut unpinned: RemovedComponents<Pinned>,
-    particles: Query<(), With<Particle>>,
 ) {
-    // Made on the first run, in the same run: returning early would miss the particles a scene
-    // spawned at startup (their `Added` is seen only once).
-    let look = look.get_or_insert_with(|| ParticleLook {
-        mesh: meshes.add(Circle::new(1.0)),
-        free: materials.add(ColorMaterial::from_color(PARTICLE)),
-        pinned: materials.add(ColorMaterial::from_color(PINNED)),
-    });
-    let unpinned: Vec<Entity> = unpinned.read().filter(|e| particles.contains(*e)).collect();
-    let all = new.iter().chain(unpinned.into_iter().map(|e| (e, false)));
-    for (e, pinned) in all {
-        let material = if pinned { &look.pinned } else { &look.free };
-        commands.entity(e).insert((
-            Mesh2d(look.mesh.clone()),
-            MeshMaterial2d(material.clone()),
-            Transform::default(),
+    let white = materials.add(ColorMaterial::from_color(Color::WHITE));
+    let springs = meshes.add(empty_mesh());
+    let dots = meshes.add(empty_mesh());
+    for (mesh, z) in [(&springs, 0.5), (&dots, 1.0)] {
+        commands.spawn((
+            Mesh2d(mesh.clone()),
+            MeshMaterial2d(white.clone()),
+            Transform::from_xyz(0.0, 0.0, z),
+            // The vertices move every frame; the bounds computed at spawn would be stale.
+            NoFrustumCulling,
         ));
     }
+    commands.insert_resource(Batches { springs, dots });
 }
 
-/// Moves each dot to its particle, sized in pixels.
-pub fn place_particles(
+fn empty_mesh() -> Mesh {
+    Mesh::new(
+        PrimitiveTopology::TriangleList,
+        RenderAssetUsages::default(),
+    )
+    .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, Vec::<[f32; 3]>::new())
+    .with_inserted_attribute(Mesh::ATTRIBUTE_COLOR, Vec::<[f32; 4]>::new())
+    .with_inserted_indices(Indices::U32(Vec::new()))
+}
+
+/// Rebuilds both meshes from the solver when it or the view changed.
+pub fn update_batches(
+    batches: Res<Batches>,
+    solver: Res<Solver>,
     view: Res<CanvasView>,
-    mut q: Query<(&Position, &mut Transform), With<Particle>>,
+    mut meshes: ResMut<Assets<Mesh>>,
+    palette: Local<StrainPalette>,
 ) {
-    let radius = DOT_PX / view.scale;
-    for (p, mut t) in &mut q {
-        t.translation = Vec3::new(p.0.x as f32, p.0.y as f32, 1.0);
-        t.scale = Vec3::splat(radius);
+    if !(solver.is_changed() || view.is_changed()) {
+        return;
+    }
+    if let Some(mut mesh) = meshes.get_mut(&batches.springs) {
+        let half = SPRING_HALF_PX / view.scale;
+        fill(
+            &mut mesh,
+            solver.springs.len(),
+            4,
+            &[0, 1, 2, 0, 2, 3],
+            |pos, col| {
+                for s in &solver.springs {
+                    let (a, b) = (solver.x[s.a as usize], solver.x[s.b as usize]);
+                    let d = b - a;
+                    let l = d.length();
+                    let strain = if s.rest > 0.0 {
+                        (l / s.rest - 1.0) as f32
+                    } else {
+                        0.0
+                    };
+                    let (a, b) = (a.as_vec2(), b.as_vec2());
+                    let n = if l > 0.0 {
+                        (d.as_vec2() / l as f32).perp() * half
+                    } else {
+                        Vec2::ZERO
+                    };
+                    pos.extend([a + n, a - n, b - n, b + n].map(|p| [p.x, p.y, 0.0]));
+                    col.extend([palette.color(strain); 4]);
+                }
+            },
+        );
+    }
+    if let Some(mut mesh) = meshes.get_mut(&batches.dots) {
+        let radius = DOT_PX / view.scale;
+        let rim: Vec<Vec2> = (0..DOT_SIDES)
+            .map(|i| Vec2::from_angle(i as f32 * std::f32::consts::TAU / DOT_SIDES as f32) * radius)
+            .collect();
+        let fan: Vec<u32> = (0..DOT_SIDES)
+            .flat_map(|i| [0, 1 + i, 1 + (i + 1) % DOT_SIDES])
+            .collect();
+        let (free, pinned) = (linear(PARTICLE), linear(PINNED));
+        fill(
+            &mut mesh,
+            solver.x.len(),
+            1 + DOT_SIDES,
+            &fan,
+            |pos, col| {
+                for (i, x) in solver.x.iter().enumerate() {
+                    let c = x.as_vec2();
+                    pos.push([c.x, c.y, 0.0]);
+                    pos.extend(rim.iter().map(|r| [c.x + r.x, c.y + r.y, 0.0]));
+                    let color = if solver.is_pinned(i) { pinned } else { free };
+                    col.extend(std::iter::repeat_n(color, 1 + DOT_SIDES as usize));
+                }
+            },
+        );
     }
 }
 
-/// Springs as lines: white at rest, red when stretched, blue when compressed.
-pub fn draw_springs(mut gizmos: Gizmos, solver: Res<Solver>) {
-    for s in &solver.springs {
-        let (a, b) = (solver.x[s.a as usize], solver.x[s.b as usize]);
-        let strain = if s.rest > 0.0 {
-            ((a - b).length() / s.rest - 1.0) as f32
-        } else {
-            0.0
-        };
-        gizmos.line_2d(a.as_vec2(), b.as_vec2(), strain_color(strain));
+/// Refills a batched mesh of `items` shapes of `corners` vertices each, reusing its buffers;
+/// the index list (`pattern` repeated per shape) is rebuilt only when the count changed.
+fn fill(
+    mesh: &mut Mesh,
+    items: usize,
+    corners: u32,
+    pattern: &[u32],
+    write: impl FnOnce(&mut Vec<[f32; 3]>, &mut Vec<[f32; 4]>),
+) {
+    let mut pos = take_attribute(mesh, Mesh::ATTRIBUTE_POSITION);
+    let mut col = take_attribute(mesh, Mesh::ATTRIBUTE_COLOR);
+    pos.clear();
+    col.clear();
+    write(&mut pos, &mut col);
+    mesh.insert_attribute(Mesh::ATTRIBUTE_POSITION, pos);
+    mesh.insert_attribute(Mesh::ATTRIBUTE_COLOR, col);
+    if mesh.indices().map_or(0, Indices::len) != items * pattern.len() {
+        let indices = (0..items as u32)
+            .flat_map(|i| pattern.iter().map(move |&k| i * corners + k))
+            .collect();
+        mesh.insert_indices(Indices::U32(indices));
     }
 }
 
-/// Colour for a relative extension: ±5 % is full colour.
-fn strain_color(strain: f32) -> Color {
-    let t = (strain / 0.05).clamp(-1.0, 1.0);
+/// Moves a vertex attribute's buffer out of the mesh, so that its allocation is reused.
+fn take_attribute<T: Attribute>(mesh: &mut Mesh, id: bevy::mesh::MeshVertexAttribute) -> Vec<T> {
+    mesh.remove_attribute(id)
+        .and_then(T::unwrap)
+        .unwrap_or_default()
+}
+
+/// The two vertex formats used here.
+trait Attribute: Sized {
+    fn unwrap(values: VertexAttributeValues) -> Option<Vec<Self>>;
+}
+
+impl Attribute for [f32; 3] {
+    fn unwrap(values: VertexAttributeValues) -> Option<Vec<Self>> {
+        match values {
+            VertexAttributeValues::Float32x3(v) => Some(v),
+            _ => None,
+        }
+    }
+}
+
+impl Attribute for [f32; 4] {
+    fn unwrap(values: VertexAttributeValues) -> Option<Vec<Self>> {
+        match values {
+            VertexAttributeValues::Float32x4(v) => Some(v),
+            _ => None,
+        }
+    }
+}
+
+/// Vertex colours are linear RGBA.
+fn linear(color: Color) -> [f32; 4] {
+    color.to_linear().to_f32_array()
+}
+
+/// Strain colours, converted to linear once: white at rest, red when stretched, blue when
+/// compressed, full colour at ±[`FULL_STRAIN`].
+pub struct StrainPalette([[f32; 4]; Self::STEPS]);
+
+impl StrainPalette {
+    const STEPS: usize = 129;
+
+    fn color(&self, strain: f32) -> [f32; 4] {
+        let t = (strain / FULL_STRAIN).clamp(-1.0, 1.0);
+        // NaN (a blown-up spring) lands on the rest colour.
+        let i = ((t + 1.0) * 0.5 * (Self::STEPS - 1) as f32).round() as usize;
+        self.0[i.min(Self::STEPS - 1)]
+    }
+}
+
+impl Default for StrainPalette {
+    fn default() -> Self {
+        StrainPalette(std::array::from_fn(|i| {
+            let t = 2.0 * i as f32 / (Self::STEPS - 1) as f32 - 1.0;
+            linear(strain_color(t))
+        }))
+    }
+}
+
+/// Colour for t = strain / full strain in [-1, 1].
+fn strain_color(t: f32) -> Color {
     if t >= 0.0 {
         Color::srgb(0.85, 0.85 * (1.0 - t) + 0.2 * t, 0.85 * (1.0 - t) + 0.2 * t)
     } else {

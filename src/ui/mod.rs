@@ -34,7 +34,7 @@ impl Plugin for AppPlugin {
             .init_resource::<panel::PanelState>()
             .init_resource::<crate::sim::watch::EnergyWatch>()
             .init_resource::<crate::sim::StabilityEstimate>()
-            .add_systems(Startup, view::spawn_camera)
+            .add_systems(Startup, (view::spawn_camera, draw::spawn_batches))
             .add_systems(Startup, move |world: &mut World| {
                 load_into_world(world, &scene);
                 if start_running {
@@ -51,9 +51,7 @@ impl Plugin for AppPlugin {
                     stats::measure,
                     stats::estimate_stability,
                     automation::drive,
-                    draw::attach_particle_meshes,
-                    draw::place_particles,
-                    draw::draw_springs,
+                    draw::update_batches.after(view::fit_camera),
                     draw::draw_frame,
                 ),
             );

@@ -44,6 +44,7 @@ impl CanvasView {
 pub fn spawn_camera(mut commands: Commands) {
     commands.spawn((
         Camera2d,
+        bevy::render::view::Msaa::Off,
         Projection::Orthographic(OrthographicProjection {
             scaling_mode: ScalingMode::WindowSize,
             ..OrthographicProjection::default_2d()

@@ -1,0 +1,156 @@
+//! The spring force pass four springs at a time, with AVX.
+//!
+//! Per spring the pass needs a square root and a division, and their latency, not memory, is
+//! what bounds the scalar loop (measured with `perf annotate`: the loop waits on `divsd`). One
+//! `vsqrtpd` and one `vdivpd` serve four springs. The operations are the scalar kernel's, in the
+//! same order ([`super::kernels::spring_force`]: d = x_a − x_b, l = √(d·d), d · (−k (l − L) / l)),
+//! and IEEE square root and division are correctly rounded, so the forces are bit for bit the
+//! scalar ones. The gather of positions and the scatter of forces stay scalar.
+
+#![cfg(target_arch = "x86_64")]
+
+use super::kernels::{MIN_SPRING_LENGTH, Run, spring_force};
+use super::solver::PackedSpring;
+use bevy::math::DVec2;
+use std::arch::x86_64::*;
+
+/// Does this CPU have AVX? (Detected once; later calls read a cached flag.)
+#[inline]
+pub fn available() -> bool {
+    std::is_x86_feature_detected!("avx")
+}
+
+/// [`super::kernels::for_each_spring_force`], four springs at a time.
+///
+/// # Safety
+/// The CPU must support AVX ([`available`]).
+#[target_feature(enable = "avx")]
+pub unsafe fn for_each_spring_force(
+    x: &[DVec2],
+    springs: &[PackedSpring],
+    mut add: impl FnMut(usize, DVec2),
+) {
+    let mut run = Run::new(springs);
+    let mut quads = springs.chunks_exact(4);
+    let mut f = [0.0f64; 8];
+    for quad in &mut quads {
+        let short = four_forces(x, quad, &mut f);
+        for (i, s) in quad.iter().enumerate() {
+            let force = (short & (1 << i) == 0).then_some(DVec2::new(f[2 * i], f[2 * i + 1]));
+            run.push(s, force, &mut add);
+        }
+    }
+    for s in quads.remainder() {
+        run.push(s, spring_force(s, x), &mut add);
+    }
+    run.finish(add);
+}
+
+/// Writes the forces on the a ends of four springs to `out` (x0, y0, x1, y1, ...) and returns a
+/// mask of the springs shorter than [`MIN_SPRING_LENGTH`] (bit i for spring i), whose forces
+/// are to be skipped, as in the scalar kernel.
+#[inline]
+#[target_feature(enable = "avx")]
+fn four_forces(x: &[DVec2], s: &[PackedSpring], out: &mut [f64; 8]) -> i32 {
+    let (s0, s1, s2, s3) = (&s[0], &s[1], &s[2], &s[3]);
+    let (a0, b0, a1, b1) = (
+        x[s0.a as usize],
+        x[s0.b as usize],
+        x[s1.a as usize],
+        x[s1.b as usize],
+    );
+    let (a2, b2, a3, b3) = (
+        x[s2.a as usize],
+        x[s2.b as usize],
+        x[s3.a as usize],
+        x[s3.b as usize],
+    );
+    // d = x_a − x_b, two springs per register: [d0, d1] and [d2, d3].
+    let d01 = _mm256_sub_pd(
+        _mm256_set_pd(a1.y, a1.x, a0.y, a0.x),
+        _mm256_set_pd(b1.y, b1.x, b0.y, b0.x),
+    );
+    let d23 = _mm256_sub_pd(
+        _mm256_set_pd(a3.y, a3.x, a2.y, a2.x),
+        _mm256_set_pd(b3.y, b3.x, b2.y, b2.x),
+    );
+    // hadd of the squares: [l0², l2², l1², l3²] (it works within 128-bit lanes).
+    let l = _mm256_sqrt_pd(_mm256_hadd_pd(
+        _mm256_mul_pd(d01, d01),
+        _mm256_mul_pd(d23, d23),
+    ));
+    // _mm256_set_pd takes the lanes high to low: these are in l's order [0, 2, 1, 3].
+    let neg_k = _mm256_set_pd(-s3.k, -s1.k, -s2.k, -s0.k);
+    let rest = _mm256_set_pd(s3.rest, s1.rest, s2.rest, s0.rest);
+    let c = _mm256_div_pd(_mm256_mul_pd(neg_k, _mm256_sub_pd(l, rest)), l);
+    // Each coefficient twice, back in spring order: [c0, c0, c1, c1] and [c2, c2, c3, c3].
+    let f01 = _mm256_mul_pd(d01, _mm256_unpacklo_pd(c, c));
+    let f23 = _mm256_mul_pd(d23, _mm256_unpackhi_pd(c, c));
+    // SAFETY: out holds eight f64: two unaligned 256-bit stores of four each.
+    unsafe {
+        _mm256_storeu_pd(out.as_mut_ptr(), f01);
+        _mm256_storeu_pd(out.as_mut_ptr().add(4), f23);
+    }
+    let short = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(
+        l,
+        _mm256_set1_pd(MIN_SPRING_LENGTH),
+    ));
+    // Lane order [0, 2, 1, 3] back to spring order: swap bits 1 and 2.
+    (short & 0b1001) | ((short & 0b0010) << 1) | ((short & 0b0100) >> 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::kernels::scatter_pairs;
+
+    /// Forces from the AVX pass and the scalar pass, for springs of every kind: runs sharing an
+    /// end, a zero-length spring, one with a NaN end, and a tail that is not a whole quad.
+    #[test]
+    fn four_at_a_time_gives_the_scalar_bits() {
+        if !available() {
+            return; // nothing to compare on this CPU
+        }
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut x: Vec<DVec2> = (0..200).map(|_| DVec2::new(next(), next())).collect();
+        x[7] = x[3]; // the spring (3, 7) has zero length
+        x[150] = DVec2::new(f64::NAN, 0.5);
+        let mut springs = Vec::new();
+        for a in 0..199u32 {
+            for b in (a + 1..200).step_by(37 + a as usize % 5) {
+                let rest = 0.5 * next();
+                springs.push(PackedSpring {
+                    a,
+                    b,
+                    rest,
+                    k: 1e4 * (0.5 + next()),
+                });
+            }
+        }
+        springs.push(PackedSpring {
+            a: 3,
+            b: 7,
+            rest: 0.1,
+            k: 1e4,
+        });
+        springs.sort_by_key(|s| (s.a, s.b));
+        assert!(springs.len() % 4 != 0);
+
+        let mut wide = vec![DVec2::ZERO; x.len()];
+        // SAFETY: AVX is available (checked above).
+        unsafe { for_each_spring_force(&x, &springs, |i, f| wide[i] += f) };
+        let mut scalar = vec![DVec2::ZERO; x.len()];
+        scatter_pairs(&springs, |_, s| spring_force(s, &x), |i, f| scalar[i] += f);
+        let bits = |v: &[DVec2]| -> Vec<(u64, u64)> {
+            v.iter().map(|p| (p.x.to_bits(), p.y.to_bits())).collect()
+        };
+        assert_eq!(bits(&wide), bits(&scalar));
+        assert!(wide[150].is_nan() && wide[0].is_finite());
+    }
+}
