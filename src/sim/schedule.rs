@@ -67,19 +67,46 @@ impl Default for TickPlan {
 
 /// The wall-clock time fixed ticks may take in one frame. Past it the remaining simulated time
 /// of the frame is dropped: the simulation slows down instead of the window freezing.
+///
+/// The allowance is at least `per_frame` and grows up to [`StepBudget::MAX_GROWTH`] times that
+/// while the main thread would otherwise sit idle between frames (waiting for a slow renderer,
+/// such as a software one): time the frame takes anyway goes to the simulation. When the
+/// idle time goes, the allowance decays back to `per_frame`.
 #[derive(Resource, Debug, Clone, Copy)]
 pub struct StepBudget {
     pub per_frame: Duration,
+    /// The current allowance.
+    pub allowance: Duration,
     frame_start: Option<Instant>,
+    frame_end: Option<Instant>,
     /// Simulated seconds dropped so far because the budget ran out.
     pub dropped_seconds: f64,
 }
 
+impl StepBudget {
+    pub const MAX_GROWTH: u32 = 4;
+
+    /// Follows the idle time between the last frame's end and this frame's start:
+    /// a = 0.9 a + 0.8 idle, within [per_frame, MAX_GROWTH · per_frame]. When the renderer sets
+    /// the pace (frame time R, other main-thread work o) this settles at a ≈ 0.9 (R − o); when
+    /// the simulation does, idle is ~0 and a decays.
+    fn adapt(&mut self, now: Instant) {
+        let idle = self
+            .frame_end
+            .map_or(Duration::ZERO, |end| now.saturating_duration_since(end));
+        let next = self.allowance.mul_f64(0.9) + idle.mul_f64(0.8);
+        self.allowance = next.clamp(self.per_frame, self.per_frame * Self::MAX_GROWTH);
+    }
+}
+
 impl Default for StepBudget {
     fn default() -> Self {
+        let per_frame = Duration::from_millis(25);
         StepBudget {
-            per_frame: Duration::from_millis(25),
+            per_frame,
+            allowance: per_frame,
             frame_start: None,
+            frame_end: None,
             dropped_seconds: 0.0,
         }
     }
@@ -122,7 +149,8 @@ impl Plugin for SimPlugin {
         .add_systems(
             RunFixedMainLoop,
             plan_tick.in_set(RunFixedMainLoopSystems::BeforeFixedMainLoop),
-        );
+        )
+        .add_systems(Last, mark_frame_end);
 
         app.init_schedule(PhysicsStep);
         app.edit_schedule(PhysicsStep, |schedule| {
@@ -377,7 +405,9 @@ fn plan_tick(
     mut time: ResMut<Time<Fixed>>,
     mut budget: ResMut<StepBudget>,
 ) {
-    budget.frame_start = Some(Instant::now());
+    let now = Instant::now();
+    budget.adapt(now);
+    budget.frame_start = Some(now);
     let steps = (plan.target_tick_seconds / params.dt)
         .round()
         .clamp(1.0, 1e6) as u32;
@@ -395,13 +425,18 @@ fn enforce_step_budget(mut budget: ResMut<StepBudget>, mut time: ResMut<Time<Fix
     let Some(start) = budget.frame_start else {
         return;
     };
-    if start.elapsed() > budget.per_frame {
+    if start.elapsed() > budget.allowance {
         let overstep = time.overstep();
         if overstep > Duration::ZERO {
             budget.dropped_seconds += overstep.as_secs_f64();
             time.discard_overstep(overstep);
         }
     }
+}
+
+/// Notes when the frame's work ended, for [`StepBudget::adapt`].
+fn mark_frame_end(mut budget: ResMut<StepBudget>) {
+    budget.frame_end = Some(Instant::now());
 }
 
 /// Runs `steps` steps of the simulation directly, through the same fixed-tick systems the app
@@ -436,4 +471,35 @@ pub fn pack(world: &mut World) -> Result<(), String> {
     world
         .run_system_cached(sync_into_solver)
         .map_err(|e| format!("cannot pack the solver: {e}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Frames paced by a slow renderer (120 ms, 10 ms of other work) let the simulation use
+    /// most of the frame; frames paced by the simulation itself bring the allowance back down.
+    #[test]
+    fn the_step_allowance_follows_idle_time() {
+        let mut budget = StepBudget::default();
+        let mut now = Instant::now();
+        let run_frame = |budget: &mut StepBudget, now: &mut Instant, frame: Duration| {
+            budget.adapt(*now);
+            let busy = (budget.allowance + Duration::from_millis(10)).min(frame);
+            budget.frame_end = Some(*now + busy);
+            *now += frame.max(busy);
+        };
+        for _ in 0..100 {
+            run_frame(&mut budget, &mut now, Duration::from_millis(120));
+        }
+        let ms = budget.allowance.as_secs_f64() * 1e3;
+        assert!(
+            (80.0..=100.0).contains(&ms),
+            "render-bound allowance {ms} ms"
+        );
+        for _ in 0..100 {
+            run_frame(&mut budget, &mut now, Duration::ZERO);
+        }
+        assert_eq!(budget.allowance, budget.per_frame);
+    }
 }

@@ -11,6 +11,7 @@ mod view;
 use crate::scene::{LoadedScene, load_into_world};
 use crate::sim::{SimParams, SimPlugin};
 use bevy::prelude::*;
+use bevy::render::renderer::RenderAdapterInfo;
 use bevy::window::WindowResolution;
 use bevy_egui::{EguiPlugin, EguiPrimaryContextPass};
 use std::path::PathBuf;
@@ -46,6 +47,7 @@ impl Plugin for AppPlugin {
                 Update,
                 (
                     view::fit_camera,
+                    view::match_antialiasing.run_if(resource_added::<RenderAdapterInfo>),
                     input::keyboard,
                     input::add_particle_on_click.after(view::fit_camera),
                     stats::measure,

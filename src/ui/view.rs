@@ -3,6 +3,8 @@
 use bevy::camera::ScalingMode;
 use bevy::math::DVec2;
 use bevy::prelude::*;
+use bevy::render::renderer::RenderAdapterInfo;
+use bevy::render::view::Msaa;
 use bevy::window::PrimaryWindow;
 
 /// World margin shown around the unit square.
@@ -44,12 +46,24 @@ impl CanvasView {
 pub fn spawn_camera(mut commands: Commands) {
     commands.spawn((
         Camera2d,
-        bevy::render::view::Msaa::Off,
         Projection::Orthographic(OrthographicProjection {
             scaling_mode: ScalingMode::WindowSize,
             ..OrthographicProjection::default_2d()
         }),
     ));
+}
+
+/// Multisampling on a GPU, none on a software renderer (lavapipe, llvmpipe), where 4× MSAA
+/// multiplies the rasterizer's work on the cores the simulation needs. Measured on the 64×64
+/// cloth under Xvfb and lavapipe: 3.6–4.9 frames/s with MSAA, 8.8–10.2 without.
+pub fn match_antialiasing(
+    adapter: Res<RenderAdapterInfo>,
+    mut cameras: Query<&mut Msaa, With<Camera2d>>,
+) {
+    let software = adapter.device_type == wgpu_types::DeviceType::Cpu;
+    for mut msaa in &mut cameras {
+        *msaa = if software { Msaa::Off } else { Msaa::Sample4 };
+    }
 }
 
 /// Fits the camera so that the unit square (plus a margin) fills the canvas.
