@@ -196,10 +196,9 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings) {
     for (d, &m) in cg.diag.iter_mut().zip(&s.mass) {
         *d = Sym2::scaled_identity(m);
     }
-    for (sp, block) in s.springs.iter().zip(&cg.blocks) {
-        let k = block.matrix();
-        cg.diag[sp.a as usize].add_scaled(k, h2);
-        cg.diag[sp.b as usize].add_scaled(k, h2);
+    for block in &cg.blocks {
+        cg.diag[block.a as usize].add_scaled(block.m, h2);
+        cg.diag[block.b as usize].add_scaled(block.m, h2);
     }
     for (d, &w) in cg.diag.iter_mut().zip(&s.inv_mass) {
         *d = if w != 0.0 {
@@ -211,7 +210,7 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings) {
 
     // b = dt (f0 + dt K v0), zero on pinned particles.
     let free = |i: usize| s.inv_mass[i] != 0.0;
-    stiffness::apply(&mut cg.ap, &s.v, &s.springs, &cg.blocks); // ap = K v0
+    stiffness::apply(&mut cg.ap, &s.v, &cg.blocks); // ap = K v0
     let mut b_norm2 = 0.0;
     for i in 0..n {
         let b = if free(i) {
@@ -228,15 +227,7 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings) {
             *dv = DVec2::ZERO;
         }
     }
-    apply_a(
-        &mut cg.ap,
-        &cg.dv,
-        &cg.blocks,
-        &s.springs,
-        &s.mass,
-        &s.inv_mass,
-        h2,
-    );
+    apply_a(&mut cg.ap, &cg.dv, &cg.blocks, &s.mass, &s.inv_mass, h2);
     let mut rz = DVec2::ZERO;
     for ((((r, z), p), ap), d) in (cg.r.iter_mut().zip(&mut cg.z).zip(&mut cg.p))
         .zip(&cg.ap)
@@ -252,15 +243,7 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings) {
     let mut r2 = cg.r.iter().map(|r| r.length_squared()).sum::<f64>();
     let mut iterations = 0;
     while r2 > tol2 && iterations < settings.max_iterations {
-        let pap = apply_a(
-            &mut cg.ap,
-            &cg.p,
-            &cg.blocks,
-            &s.springs,
-            &s.mass,
-            &s.inv_mass,
-            h2,
-        );
+        let pap = apply_a(&mut cg.ap, &cg.p, &cg.blocks, &s.mass, &s.inv_mass, h2);
         if !pap.is_finite() || pap <= 0.0 {
             break; // not positive definite along p, or non-finite: stop with what we have
         }
@@ -303,12 +286,11 @@ fn apply_a(
     ap: &mut [DVec2],
     u: &[DVec2],
     blocks: &[Block],
-    springs: &[PackedSpring],
     mass: &[f64],
     inv_mass: &[f64],
     h2: f64,
 ) -> f64 {
-    stiffness::apply(ap, u, springs, blocks);
+    stiffness::apply(ap, u, blocks);
     let mut dot = DVec2::ZERO;
     for (((ap, &u), &m), &w) in ap.iter_mut().zip(u).zip(mass).zip(inv_mass) {
         *ap = if w != 0.0 {

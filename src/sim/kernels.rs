@@ -57,9 +57,9 @@ pub fn scatter_pairs(
     mut pair: impl FnMut(usize, &PackedSpring) -> Option<DVec2>,
     mut add: impl FnMut(usize, DVec2),
 ) {
-    let mut run = Run::new(springs);
+    let mut run = Run::new(springs.first().map(|s| s.a));
     for (k, s) in springs.iter().enumerate() {
-        run.push(s, pair(k, s), &mut add);
+        run.push((s.a, s.b), pair(k, s), &mut add);
     }
     run.finish(add);
 }
@@ -76,23 +76,28 @@ pub struct Run {
 
 impl Run {
     #[inline(always)]
-    pub fn new(springs: &[PackedSpring]) -> Run {
+    pub fn new(first_a: Option<u32>) -> Run {
         Run {
-            a: springs.first().map_or(0, |s| s.a as usize),
+            a: first_a.map_or(0, |a| a as usize),
             on_a: DVec2::ZERO,
         }
     }
 
-    /// Scatters spring `s`'s contribution `g` on a (and −g on b).
+    /// Scatters a pair's contribution `g` on a (and −g on b).
     #[inline(always)]
-    pub fn push(&mut self, s: &PackedSpring, g: Option<DVec2>, add: &mut impl FnMut(usize, DVec2)) {
-        if s.a as usize != self.a {
+    pub fn push(
+        &mut self,
+        (a, b): (u32, u32),
+        g: Option<DVec2>,
+        add: &mut impl FnMut(usize, DVec2),
+    ) {
+        if a as usize != self.a {
             add(self.a, self.on_a);
-            (self.a, self.on_a) = (s.a as usize, DVec2::ZERO);
+            (self.a, self.on_a) = (a as usize, DVec2::ZERO);
         }
         if let Some(g) = g {
             self.on_a += g;
-            add(s.b as usize, -g);
+            add(b as usize, -g);
         }
     }
 

@@ -76,7 +76,7 @@ pub fn omega_estimate(s: &Solver, steps: usize) -> f64 {
         for i in 0..n {
             tmp[i] = y[i] * inv_sqrt_m[i];
         }
-        stiffness::apply(out, tmp, &s.springs, &blocks);
+        stiffness::apply(out, tmp, &blocks);
         for i in 0..n {
             out[i] *= inv_sqrt_m[i];
         }

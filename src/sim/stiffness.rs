@@ -11,42 +11,35 @@ use super::kernels::{self, MIN_SPRING_LENGTH};
 use super::solver::PackedSpring;
 use bevy::math::DVec2;
 
-/// One spring's block: direction d̂, k α (isotropic part) and k (1 − α) (along d̂).
+/// One spring's block k α I + k (1 − α) d̂d̂ᵀ, with the spring's ends: all that applying K
+/// reads (32 bytes a spring, so that a 64×64 cloth's blocks stay in a core's L2 cache).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Block {
-    pub dir: DVec2,
-    pub k_iso: f64,
-    pub k_axial: f64,
+    pub a: u32,
+    pub b: u32,
+    pub m: Sym2,
 }
 
 impl Block {
     pub fn of(spring: &PackedSpring, x: &[DVec2]) -> Block {
-        let d = x[spring.a as usize] - x[spring.b as usize];
+        let (a, b) = (spring.a, spring.b);
+        let d = x[a as usize] - x[b as usize];
         let l = d.length();
         if l < MIN_SPRING_LENGTH {
-            return Block::default();
+            return Block {
+                a,
+                b,
+                m: Sym2::default(),
+            };
         }
         let alpha = (1.0 - spring.rest / l).max(0.0);
-        Block {
-            dir: d / l,
-            k_iso: spring.k * alpha,
-            k_axial: spring.k * (1.0 - alpha),
-        }
-    }
-
-    /// The block times a relative displacement.
-    fn times(&self, du: DVec2) -> DVec2 {
-        du * self.k_iso + self.dir * (self.k_axial * self.dir.dot(du))
-    }
-
-    /// The block as a matrix.
-    pub fn matrix(&self) -> Sym2 {
-        let (d, a) = (self.dir, self.k_axial);
-        Sym2 {
-            xx: self.k_iso + a * d.x * d.x,
-            xy: a * d.x * d.y,
-            yy: self.k_iso + a * d.y * d.y,
-        }
+        let (dir, k_iso, k_axial) = (d / l, spring.k * alpha, spring.k * (1.0 - alpha));
+        let m = Sym2 {
+            xx: k_iso + k_axial * dir.x * dir.x,
+            xy: k_axial * dir.x * dir.y,
+            yy: k_iso + k_axial * dir.y * dir.y,
+        };
+        Block { a, b, m }
     }
 }
 
@@ -100,11 +93,13 @@ pub fn blocks(springs: &[PackedSpring], x: &[DVec2], out: &mut Vec<Block>) {
 }
 
 /// out = K u.
-pub fn apply(out: &mut [DVec2], u: &[DVec2], springs: &[PackedSpring], blocks: &[Block]) {
+pub fn apply(out: &mut [DVec2], u: &[DVec2], blocks: &[Block]) {
     out.fill(DVec2::ZERO);
-    kernels::scatter_pairs(
-        springs,
-        |k, s| Some(blocks[k].times(u[s.a as usize] - u[s.b as usize])),
-        |i, g| out[i] += g,
-    );
+    let mut add = |i: usize, g: DVec2| out[i] += g;
+    let mut run = kernels::Run::new(blocks.first().map(|b| b.a));
+    for block in blocks {
+        let g = block.m.times(u[block.a as usize] - u[block.b as usize]);
+        run.push((block.a, block.b), Some(g), &mut add);
+    }
+    run.finish(add);
 }

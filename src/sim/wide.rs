@@ -30,18 +30,18 @@ pub unsafe fn for_each_spring_force(
     springs: &[PackedSpring],
     mut add: impl FnMut(usize, DVec2),
 ) {
-    let mut run = Run::new(springs);
+    let mut run = Run::new(springs.first().map(|s| s.a));
     let mut quads = springs.chunks_exact(4);
     let mut f = [0.0f64; 8];
     for quad in &mut quads {
         let short = four_forces(x, quad, &mut f);
         for (i, s) in quad.iter().enumerate() {
             let force = (short & (1 << i) == 0).then_some(DVec2::new(f[2 * i], f[2 * i + 1]));
-            run.push(s, force, &mut add);
+            run.push((s.a, s.b), force, &mut add);
         }
     }
     for s in quads.remainder() {
-        run.push(s, spring_force(s, x), &mut add);
+        run.push((s.a, s.b), spring_force(s, x), &mut add);
     }
     run.finish(add);
 }
