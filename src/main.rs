@@ -257,9 +257,17 @@ fn perf(out: &std::path::Path, mut threads: Vec<usize>, budget: f64) -> ExitCode
         Ok(r) => r,
         Err(e) => return fail(e),
     };
+    eprintln!("  bandwidth at each working set");
+    let bounds = match perf::bounds(&rows) {
+        Ok(b) => b,
+        Err(e) => return fail(e),
+    };
     let list: Vec<String> = threads.iter().map(|t| t.to_string()).collect();
-    let command = format!("hooke bench perf --threads {}", list.join(","));
-    let md = perf::markdown(&rows, &loads, &command);
+    let command = format!(
+        "hooke bench perf --threads {} --budget {budget:e}",
+        list.join(",")
+    );
+    let md = perf::markdown(&rows, &loads, &bounds, &command);
     write_report(out, &[("perf.csv", &perf::csv(&rows)), ("perf.md", &md)])
 }
 

@@ -3,5 +3,6 @@
 pub mod perf;
 pub mod plot;
 pub mod stability;
+pub mod traffic;
 pub mod trajectory;
 pub mod work_precision;

@@ -3,6 +3,7 @@
 //! Every run steps the full schedule (sync, force, integrate, damping, ground, advance) of the
 //! cloth with damping and ground on, as `hooke run` does.
 
+use super::traffic;
 use crate::scene::{Generator, LoadedScene, Pin, Scene};
 use crate::sim::{self, Integrator, SimParams, SolverThreads};
 use serde::Serialize;
@@ -116,6 +117,42 @@ pub fn run(
     Ok((rows, loads))
 }
 
+/// One symplectic-Euler row against the bandwidth bound: the modelled bytes per spring update
+/// ([`super::traffic`]) at the bandwidth measured for the cloth's working set.
+#[derive(Debug, Clone)]
+pub struct Bound {
+    pub scene: String,
+    pub threads: usize,
+    pub bytes_per_update: f64,
+    pub working_set_mb: f64,
+    pub bandwidth_gb_s: f64,
+    /// Spring updates per second the bandwidth allows.
+    pub bound: f64,
+    pub measured: f64,
+}
+
+/// The bandwidth bound of each symplectic-Euler row.
+pub fn bounds(rows: &[Row]) -> Result<Vec<Bound>, String> {
+    let symplectic = Integrator::SymplecticEuler.cli_name();
+    rows.iter()
+        .filter(|r| r.integrator == symplectic)
+        .map(|r| {
+            let bytes = traffic::working_set(r.particles, r.springs);
+            let bandwidth = traffic::bandwidth(bytes, r.threads)?;
+            let per_update = traffic::bytes_per_step(r.particles, r.springs) / r.springs as f64;
+            Ok(Bound {
+                scene: r.scene.clone(),
+                threads: r.threads,
+                bytes_per_update: per_update,
+                working_set_mb: bytes as f64 / 1e6,
+                bandwidth_gb_s: bandwidth / 1e9,
+                bound: bandwidth / per_update,
+                measured: r.spring_updates_per_s,
+            })
+        })
+        .collect()
+}
+
 pub fn csv(rows: &[Row]) -> String {
     let mut s = String::from(
         "scene,particles,springs,integrator,threads,steps,wall_s,spring_updates_per_s,ns_per_spring_update\n",
@@ -138,7 +175,7 @@ pub fn csv(rows: &[Row]) -> String {
     s
 }
 
-pub fn markdown(rows: &[Row], loads: &[LoadTime], command: &str) -> String {
+pub fn markdown(rows: &[Row], loads: &[LoadTime], bounds: &[Bound], command: &str) -> String {
     let mut s = String::from("# Performance\n\n");
     let _ = writeln!(
         s,
@@ -176,6 +213,34 @@ pub fn markdown(rows: &[Row], loads: &[LoadTime], command: &str) -> String {
             let _ = write!(s, " {v} |");
         }
         s.push('\n');
+    }
+    let _ = writeln!(
+        s,
+        "\nSymplectic Euler against the memory-bandwidth bound: bytes a step moves (a model, pass \
+         by pass: {} per particle, {} per spring; see `src/bench/traffic.rs`) per spring update, and \
+         the best read-modify-write bandwidth measured over an array of the step's working-set \
+         size on as many threads:\n",
+        traffic::PARTICLE_BYTES,
+        traffic::SPRING_BYTES
+    );
+    let _ = writeln!(
+        s,
+        "| cloth | threads | bytes / update | working set (MB) | bandwidth (GB/s) | bound (M/s) | measured (M/s) | of bound |\n\
+         | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+    );
+    for b in bounds {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.0} | {:.1} | {:.1} | {:.0} | {:.1} | {:.0} % |",
+            b.scene,
+            b.threads,
+            b.bytes_per_update,
+            b.working_set_mb,
+            b.bandwidth_gb_s,
+            b.bound / 1e6,
+            b.measured / 1e6,
+            100.0 * b.measured / b.bound
+        );
     }
     let _ = writeln!(
         s,
