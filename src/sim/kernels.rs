@@ -45,26 +45,26 @@ pub fn for_each_spring_force(x: &[DVec2], springs: &[PackedSpring], add: impl Fn
         unsafe { super::wide::for_each_spring_force(x, springs, add) };
         return;
     }
-    scatter_pairs(springs, |_, s| spring_force(s, x), add);
+    scatter_pairs(springs, |s| spring_force(s, x), add);
 }
 
-/// For each spring `k`, `add(a, g)` and `add(b, -g)` with `g = pair(k, spring)` (nothing for
-/// `None`): the scatter of every pairwise quantity (spring forces, the stiffness matrix times a
-/// vector).
+/// For each spring, `add(a, g)` and `add(b, -g)` with `g = force(spring)` (nothing for `None`),
+/// one spring at a time: the scalar spring pass.
 #[inline(always)]
 pub fn scatter_pairs(
     springs: &[PackedSpring],
-    mut pair: impl FnMut(usize, &PackedSpring) -> Option<DVec2>,
+    mut force: impl FnMut(&PackedSpring) -> Option<DVec2>,
     mut add: impl FnMut(usize, DVec2),
 ) {
     let mut run = Run::new(springs.first().map(|s| s.a));
-    for (k, s) in springs.iter().enumerate() {
-        run.push((s.a, s.b), pair(k, s), &mut add);
+    for s in springs {
+        run.push((s.a, s.b), force(s), &mut add);
     }
     run.finish(add);
 }
 
-/// The scatter's running sum on a spring's end a.
+/// The scatter's running sum on a pair's end a (spring forces, and K times a vector in
+/// [`super::stiffness::apply`]).
 ///
 /// Consecutive springs that share their end a (the packed springs are sorted by it, see
 /// [`super::sync`]) sum their contributions to a in a register and hand them over once. Adding

@@ -146,7 +146,7 @@ mod tests {
         // SAFETY: AVX is available (checked above).
         unsafe { for_each_spring_force(&x, &springs, |i, f| wide[i] += f) };
         let mut scalar = vec![DVec2::ZERO; x.len()];
-        scatter_pairs(&springs, |_, s| spring_force(s, &x), |i, f| scalar[i] += f);
+        scatter_pairs(&springs, |s| spring_force(s, &x), |i, f| scalar[i] += f);
         let bits = |v: &[DVec2]| -> Vec<(u64, u64)> {
             v.iter().map(|p| (p.x.to_bits(), p.y.to_bits())).collect()
         };
