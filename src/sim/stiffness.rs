@@ -66,8 +66,9 @@ impl Sym2 {
         self.yy += s * other.yy;
     }
 
-    /// The inverse, or zero for a singular matrix (a pinned particle's row, which the solve
-    /// holds at zero anyway).
+    /// The inverse, or zero when there is none (a singular or non-finite block: only a
+    /// blown-up state makes one, since a free particle's block is its mass plus a positive
+    /// semi-definite part; pinned rows are zeroed by the caller).
     pub fn inverse_or_zero(&self) -> Sym2 {
         let det = self.xx * self.yy - self.xy * self.xy;
         if det.is_normal() {
