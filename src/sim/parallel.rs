@@ -12,6 +12,7 @@ use super::solver::PackedSpring;
 use bevy::math::DVec2;
 use bevy::prelude::*;
 use rayon::prelude::*;
+use std::ops::Range;
 use std::sync::Arc;
 
 /// Scenes with fewer springs than this step on one thread.
@@ -65,6 +66,17 @@ impl SolverThreads {
         self.threads
     }
 
+    /// Runs `work` on one of the pool's threads (on the calling thread when there is no
+    /// pool), so that the parallel passes inside it start from a pool thread: they then share
+    /// their work with the pool's other threads directly, and no thread outside the pool waits
+    /// to be woken after each pass.
+    pub fn run<R: Send>(&self, work: impl FnOnce() -> R + Send) -> R {
+        match &self.pool {
+            Some(pool) => pool.install(work),
+            None => work(),
+        }
+    }
+
     /// The pool, when the work is big enough to share.
     fn pool_for(&self, springs: usize) -> Option<&rayon::ThreadPool> {
         self.pool
@@ -85,86 +97,158 @@ impl SolverThreads {
 struct Layout {
     springs: usize,
     threads: usize,
-    chunk: usize,
-    /// Per chunk, the half-open particle range that no other chunk touches.
-    exclusive: Vec<(usize, usize)>,
+    parts: Vec<Part>,
 }
+
+/// One thread's share of the spring pass.
+#[derive(Debug, Clone, PartialEq)]
+struct Part {
+    /// The particles no other part touches: this part adds into them directly.
+    exclusive: Range<usize>,
+    /// The part's springs, a contiguous range of the packed springs, cut into segments.
+    segments: Vec<Segment>,
+}
+
+/// A run of a part's springs.
+#[derive(Debug, Clone, PartialEq)]
+struct Segment {
+    springs: Range<usize>,
+    /// Both ends of every spring lie in the part's exclusive range: the plain kernel runs on
+    /// it. Otherwise forces on particles outside the range are recorded and added after.
+    inner: bool,
+}
+
+/// Runs of inner springs shorter than this join the recording segments around them: a segment
+/// boundary splits a particle's register run in two.
+const MIN_INNER_SEGMENT: usize = 64;
 
 impl Layout {
     fn new(springs: &[PackedSpring], threads: usize) -> Layout {
         let chunk = springs.len().div_ceil(threads).max(1);
-        let touched: Vec<(usize, usize)> = springs
-            .chunks(chunk)
+        let chunks: Vec<Range<usize>> = (0..springs.len())
+            .step_by(chunk)
+            .map(|start| start..(start + chunk).min(springs.len()))
+            .collect();
+        let touched: Vec<(usize, usize)> = chunks
+            .iter()
             .map(|c| {
-                c.iter().fold((usize::MAX, 0), |(lo, hi), s| {
-                    let (a, b) = (s.a as usize, s.b as usize);
-                    (lo.min(a).min(b), hi.max(a + 1).max(b + 1))
-                })
+                springs[c.clone()]
+                    .iter()
+                    .fold((usize::MAX, 0), |(lo, hi), s| {
+                        let (a, b) = (s.a as usize, s.b as usize);
+                        (lo.min(a).min(b), hi.max(a + 1).max(b + 1))
+                    })
             })
             .collect();
-        let exclusive = touched
-            .iter()
+        let parts = chunks
+            .into_iter()
             .enumerate()
-            .map(|(t, &(mut lo, mut hi))| {
-                for (j, &(lj, hj)) in touched.iter().enumerate() {
-                    if j == t || lj >= hi || hj <= lo {
-                        continue; // no overlap with what is left
-                    }
-                    if lj <= lo {
-                        lo = hj.min(hi);
-                    } else if hj >= hi {
-                        hi = lj.max(lo);
-                    } else if lj - lo >= hi - hj {
-                        hi = lj; // the other lies inside: keep the larger side
-                    } else {
-                        lo = hj;
-                    }
+            .map(|(t, chunk)| {
+                let exclusive = exclusive_range(&touched, t);
+                let segments = segments(springs, chunk, &exclusive);
+                Part {
+                    exclusive,
+                    segments,
                 }
-                (lo, hi.max(lo))
             })
             .collect();
         Layout {
             springs: springs.len(),
             threads,
-            chunk,
-            exclusive,
+            parts,
         }
     }
+}
+
+/// The part of chunk `t`'s touched particle range that no other chunk touches (when another
+/// chunk's range lies inside it, the larger side is kept).
+fn exclusive_range(touched: &[(usize, usize)], t: usize) -> Range<usize> {
+    let (mut lo, mut hi) = touched[t];
+    for (j, &(lj, hj)) in touched.iter().enumerate() {
+        if j == t || lj >= hi || hj <= lo {
+            continue; // no overlap with what is left
+        }
+        if lj <= lo {
+            lo = hj.min(hi);
+        } else if hj >= hi {
+            hi = lj.max(lo);
+        } else if lj - lo >= hi - hj {
+            hi = lj; // the other lies inside: keep the larger side
+        } else {
+            lo = hj;
+        }
+    }
+    lo..hi.max(lo)
+}
+
+/// Cuts `chunk` into alternating inner and recording segments.
+fn segments(
+    springs: &[PackedSpring],
+    chunk: Range<usize>,
+    exclusive: &Range<usize>,
+) -> Vec<Segment> {
+    let inner = |s: &PackedSpring| {
+        exclusive.contains(&(s.a as usize)) && exclusive.contains(&(s.b as usize))
+    };
+    let mut out: Vec<Segment> = Vec::new();
+    let mut i = chunk.start;
+    while i < chunk.end {
+        let kind = inner(&springs[i]);
+        let len = springs[i..chunk.end]
+            .iter()
+            .take_while(|s| inner(s) == kind)
+            .count();
+        let seg = i..i + len;
+        i += len;
+        let kind = kind && len >= MIN_INNER_SEGMENT;
+        match out.last_mut() {
+            Some(last) if !last.inner && !kind => last.springs.end = seg.end,
+            _ => out.push(Segment {
+                springs: seg,
+                inner: kind,
+            }),
+        }
+    }
+    out
 }
 
 /// The spring pass's per-thread state, reused from step to step.
 #[derive(Debug, Default, Clone)]
 pub struct SpringBuffers {
     layout: Option<Layout>,
-    /// Per chunk, the forces on particles outside its exclusive range, applied after.
+    /// Per part, the forces on particles outside its exclusive range, applied after.
     boundary: Vec<Vec<(u32, DVec2)>>,
 }
 
-/// The force array, shared by the threads of the spring pass, each of which writes only the
-/// particles of its own exclusive range.
-struct SharedForces(*mut DVec2);
-// SAFETY: the spring pass hands each thread a disjoint range of indices to write through this
-// pointer; nothing else touches the array until the pass returns.
-unsafe impl Send for SharedForces {}
-unsafe impl Sync for SharedForces {}
-
-impl SharedForces {
-    /// Adds `v` to element `i`.
-    ///
-    /// # Safety
-    /// `i` is in bounds and in the calling thread's exclusive range.
-    unsafe fn add(&self, i: usize, v: DVec2) {
-        // SAFETY: guaranteed by the caller.
-        unsafe { *self.0.add(i) += v };
+/// Splits `f` into one mutable slice per range; the ranges are disjoint, in any order.
+fn carve<'f>(
+    mut f: &'f mut [DVec2],
+    ranges: impl Iterator<Item = Range<usize>>,
+) -> Vec<&'f mut [DVec2]> {
+    let mut order: Vec<(usize, Range<usize>)> = ranges.enumerate().collect();
+    order.sort_by_key(|(_, r)| r.start);
+    let mut slices: Vec<(usize, &'f mut [DVec2])> = Vec::with_capacity(order.len());
+    let mut at = 0;
+    for (t, r) in order {
+        let rest = std::mem::take(&mut f);
+        let (_, tail) = rest.split_at_mut(r.start - at);
+        let (mine, tail) = tail.split_at_mut(r.len());
+        slices.push((t, mine));
+        f = tail;
+        at = r.end;
     }
+    slices.sort_by_key(|(t, _)| *t);
+    slices.into_iter().map(|(_, s)| s).collect()
 }
 
 /// f += Σ spring forces, each spring evaluated once, on the pool's threads when worthwhile.
 ///
-/// The springs are split into one contiguous chunk per thread. A thread adds its forces
-/// straight into f for the particles no other chunk touches (for a row-major cloth, all but
-/// about one row at each end of its chunk) and records the others; the recorded forces are
-/// added after the parallel part. No atomics and no full-size buffers: one parallel region.
+/// The springs are split into one contiguous part per thread, and each part's particles into
+/// those no other part touches (its exclusive range, a slice of f of its own) and the rest.
+/// Within a part, runs of springs with both ends in the exclusive range (for a row-major
+/// cloth, all but about one row's springs at each end of the part) go through the serial
+/// kernel unchanged; the others record their forces on outside particles, which are added
+/// after the parallel part. No atomics, no unsafe, no full-size buffers: one parallel region.
 pub fn accumulate_spring_forces(
     threads: &SolverThreads,
     buffers: &mut SpringBuffers,
@@ -186,33 +270,173 @@ pub fn accumulate_spring_forces(
     let Some(layout) = buffers.layout.as_ref() else {
         return;
     };
-    buffers
-        .boundary
-        .resize_with(layout.exclusive.len(), Vec::new);
-    let n = f.len();
-    let out = SharedForces(f.as_mut_ptr());
+    buffers.boundary.resize_with(layout.parts.len(), Vec::new);
+    let outs = carve(f, layout.parts.iter().map(|p| p.exclusive.clone()));
     pool.install(|| {
-        springs
-            .par_chunks(layout.chunk)
-            .zip(layout.exclusive.par_iter())
-            .zip(buffers.boundary.par_iter_mut())
-            .for_each(|((chunk, &(lo, hi)), boundary)| {
-                boundary.clear();
-                let add = |i: usize, v: DVec2| {
-                    if i >= lo && i < hi && i < n {
-                        // SAFETY: i < n, and [lo, hi) is this chunk's exclusive range: no other
-                        // thread writes or reads f[i] during this pass.
-                        unsafe { out.add(i, v) };
-                    } else {
-                        boundary.push((i as u32, v));
-                    }
-                };
-                kernels::for_each_spring_force(x, chunk, add);
-            });
+        (layout
+            .parts
+            .par_iter()
+            .zip(outs)
+            .zip(buffers.boundary.par_iter_mut()))
+        .for_each(|((part, out), boundary)| {
+            boundary.clear();
+            let base = part.exclusive.start;
+            for seg in &part.segments {
+                let springs = &springs[seg.springs.clone()];
+                if seg.inner {
+                    kernels::for_each_spring_force(x, springs, |i, v| out[i - base] += v);
+                } else {
+                    kernels::for_each_spring_force(x, springs, |i, v| {
+                        match i.checked_sub(base).and_then(|j| out.get_mut(j)) {
+                            Some(o) => *o += v,
+                            None => boundary.push((i as u32, v)),
+                        }
+                    });
+                }
+            }
+        });
     });
     for boundary in &buffers.boundary {
         for &(i, v) in boundary {
             f[i as usize] += v;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The springs of a row-major `w`×`h` grid, structural and both diagonals, sorted as the
+    /// solver packs them.
+    fn grid(w: u32, h: u32) -> Vec<PackedSpring> {
+        let mut springs = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                let i = y * w + x;
+                let mut link = |j: u32| {
+                    springs.push(PackedSpring {
+                        a: i,
+                        b: j,
+                        rest: 0.01,
+                        k: 1e4,
+                    })
+                };
+                if x + 1 < w {
+                    link(i + 1);
+                }
+                if y + 1 < h {
+                    link(i + w);
+                    if x + 1 < w {
+                        link(i + w + 1);
+                    }
+                    if x > 0 {
+                        link(i + w - 1);
+                    }
+                }
+            }
+        }
+        springs.sort_by_key(|s| (s.a, s.b));
+        springs
+    }
+
+    /// A scrambled network: ends in any order, far apart, shared by many springs.
+    fn tangle(n: u32, count: usize) -> Vec<PackedSpring> {
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        let mut springs: Vec<PackedSpring> = (0..count)
+            .map(|_| PackedSpring {
+                a: (next() % n as u64) as u32,
+                b: (next() % n as u64) as u32,
+                rest: 0.1,
+                k: 1e3,
+            })
+            .collect();
+        springs.sort_by_key(|s| (s.a, s.b));
+        springs
+    }
+
+    fn positions(n: u32) -> Vec<DVec2> {
+        (0..n)
+            .map(|i| {
+                DVec2::new(
+                    (i % 97) as f64 * 0.013,
+                    (i / 97) as f64 * 0.011 + (i % 7) as f64 * 1e-3,
+                )
+            })
+            .collect()
+    }
+
+    /// Every part's segments cover its chunk in order, inner segments keep both ends in the
+    /// part's exclusive range, and the exclusive ranges do not overlap.
+    #[test]
+    fn parts_cover_the_springs_and_own_disjoint_particles() {
+        for (n, springs) in [(160 * 160, grid(160, 160)), (5000, tangle(5000, 30_000))] {
+            for threads in [2, 3, 4] {
+                let layout = Layout::new(&springs, threads);
+                let mut next = 0;
+                for part in &layout.parts {
+                    for seg in &part.segments {
+                        assert_eq!(seg.springs.start, next);
+                        next = seg.springs.end;
+                        if seg.inner {
+                            assert!(seg.springs.len() >= MIN_INNER_SEGMENT);
+                            assert!(springs[seg.springs.clone()].iter().all(|s| {
+                                part.exclusive.contains(&(s.a as usize))
+                                    && part.exclusive.contains(&(s.b as usize))
+                            }));
+                        }
+                    }
+                }
+                assert_eq!(next, springs.len());
+                let mut ranges: Vec<_> = layout.parts.iter().map(|p| p.exclusive.clone()).collect();
+                ranges.sort_by_key(|r| r.start);
+                assert!(ranges.windows(2).all(|w| w[0].end <= w[1].start));
+                assert!(ranges.last().is_some_and(|r| r.end <= n as usize));
+            }
+        }
+        // A cloth's parts run almost all their springs through the plain kernel.
+        let springs = grid(160, 160);
+        let layout = Layout::new(&springs, 2);
+        let inner: usize = (layout.parts.iter().flat_map(|p| &p.segments))
+            .filter(|s| s.inner)
+            .map(|s| s.springs.len())
+            .sum();
+        assert!(
+            inner as f64 > 0.97 * springs.len() as f64,
+            "{inner} of {}",
+            springs.len()
+        );
+    }
+
+    /// The threaded pass gives the serial forces up to the order of summation.
+    #[test]
+    fn threaded_forces_match_the_serial_ones() {
+        for (n, springs) in [(160 * 160, grid(160, 160)), (5000, tangle(5000, 30_000))] {
+            let x = positions(n);
+            let mut serial = vec![DVec2::ZERO; n as usize];
+            kernels::accumulate_spring_forces(&mut serial, &x, &springs);
+            let scale = serial
+                .iter()
+                .map(|f| f.abs().max_element())
+                .fold(0.0, f64::max);
+            for count in [2, 3] {
+                let threads = SolverThreads::new(count).unwrap();
+                let mut buffers = SpringBuffers::default();
+                let mut threaded = vec![DVec2::ZERO; n as usize];
+                accumulate_spring_forces(&threads, &mut buffers, &mut threaded, &x, &springs);
+                for (i, (a, b)) in serial.iter().zip(&threaded).enumerate() {
+                    assert!(
+                        (*a - *b).abs().max_element() <= 1e-12 * scale,
+                        "particle {i} with {count} threads: {a} vs {b}"
+                    );
+                }
+            }
         }
     }
 }

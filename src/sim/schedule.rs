@@ -378,23 +378,26 @@ fn advance_positions(
 /// Runs this tick's steps; stops at the first step that produced a non-finite value.
 fn run_steps(world: &mut World) {
     let steps = world.resource::<TickPlan>().steps_per_tick;
-    world.schedule_scope(PhysicsStep, |world, schedule| {
-        for _ in 0..steps {
-            schedule.run(world);
-            let dt = world.resource::<SimParams>().dt;
-            let mut clock = world.resource_mut::<SimClock>();
-            clock.steps += 1;
-            clock.time += dt;
-            let clock = *clock;
-            if world.resource::<Solver>().non_finite {
-                *world.resource_mut::<SimStatus>() = SimStatus::BlewUp {
-                    step: clock.steps,
-                    time: clock.time,
-                };
-                world.resource_mut::<SimParams>().paused = true;
-                break;
+    let threads = world.resource::<SolverThreads>().clone();
+    threads.run(|| {
+        world.schedule_scope(PhysicsStep, |world, schedule| {
+            for _ in 0..steps {
+                schedule.run(world);
+                let dt = world.resource::<SimParams>().dt;
+                let mut clock = world.resource_mut::<SimClock>();
+                clock.steps += 1;
+                clock.time += dt;
+                let clock = *clock;
+                if world.resource::<Solver>().non_finite {
+                    *world.resource_mut::<SimStatus>() = SimStatus::BlewUp {
+                        step: clock.steps,
+                        time: clock.time,
+                    };
+                    world.resource_mut::<SimParams>().paused = true;
+                    break;
+                }
             }
-        }
+        })
     });
 }
 
