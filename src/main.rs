@@ -120,6 +120,10 @@ struct RunArgs {
     /// Print one JSON object instead of a summary.
     #[arg(long)]
     json: bool,
+    /// Also report the wall time of each pass of the step (forces, integrate, damping,
+    /// ground, advance).
+    #[arg(long)]
+    profile: bool,
 }
 
 /// Exit codes.
@@ -166,6 +170,7 @@ fn run(args: RunArgs) -> ExitCode {
         stiffness: args.stiffness,
         damping: args.damping,
         threads: args.threads,
+        profile: args.profile,
     };
     let run = match runner::run(&loaded, &overrides, duration) {
         Ok(r) => r,
@@ -195,6 +200,22 @@ fn run(args: RunArgs) -> ExitCode {
             r.energy_start,
             r.energy_end
         );
+        if let Some(t) = &r.pass_seconds {
+            let share = |s: f64| 100.0 * s / t.total().max(1e-12);
+            println!(
+                "passes: forces {:.3} s ({:.0}%), integrate {:.3} s ({:.0}%), damping {:.3} s ({:.0}%), ground {:.3} s ({:.0}%), advance {:.3} s ({:.0}%)",
+                t.forces,
+                share(t.forces),
+                t.integrate,
+                share(t.integrate),
+                t.damping,
+                share(t.damping),
+                t.ground,
+                share(t.ground),
+                t.advance,
+                share(t.advance)
+            );
+        }
     }
     if !r.finite {
         eprintln!(

@@ -24,6 +24,8 @@ pub struct Overrides {
     pub damping: Option<f64>,
     /// Solver threads (default: all cores).
     pub threads: Option<usize>,
+    /// Time each pass of the step (the report's `pass_seconds`).
+    pub profile: bool,
 }
 
 impl Overrides {
@@ -74,6 +76,9 @@ pub struct RunReport {
     /// Mean conjugate-gradient iterations per step (implicit Euler only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub cg_iterations_per_step: Option<f64>,
+    /// Wall time per pass, summed over the run (`--profile` only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pass_seconds: Option<sim::PassTimes>,
     /// The 1-based step that produced a non-finite value, if one did. The final state (and
     /// `--out`) is then the last finite one, at the end of the tick before.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -115,6 +120,9 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
     let mut app = crate::headless_app();
     if let Some(t) = overrides.threads {
         app.insert_resource(sim::SolverThreads::new(t)?);
+    }
+    if overrides.profile {
+        app.init_resource::<sim::PassTimes>();
     }
     let world = app.world_mut();
     load_into_world(world, loaded);
@@ -187,6 +195,7 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
         omega_max_bound: stability.omega_bound,
         finite: blowup_step.is_none() && solver.state_is_finite(),
         cg_iterations_per_step: solver.scratch.cg_iterations_per_step(),
+        pass_seconds: world.get_resource::<sim::PassTimes>().cloned(),
         blowup_step,
     };
     Ok(Run { report, app })

@@ -127,6 +127,31 @@ fn time_and_overrides() {
     assert_ne!(soft["energy_end"], stiff["energy_end"]);
 }
 
+/// --profile adds the wall time of each pass, which together fit in the run's wall time and
+/// leave the result unchanged; without it the report has no pass times.
+#[test]
+fn profile_reports_time_per_pass() {
+    let args = ["run", "--scene", "cloth32", "--steps", "200", "--json"];
+    let plain = json(&hooke(&args));
+    assert!(plain.get("pass_seconds").is_none());
+    let o = hooke(&[&args[..], &["--profile"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let r = json(&o);
+    assert_eq!(r["energy_end"], plain["energy_end"]);
+    let passes = &r["pass_seconds"];
+    let mut total = 0.0;
+    for pass in ["forces", "integrate", "damping", "ground", "advance"] {
+        let s = passes[pass].as_f64().unwrap_or(-1.0);
+        assert!(s > 0.0, "{pass}: {s}");
+        total += s;
+    }
+    assert!(
+        total <= r["wall_s"].as_f64().unwrap(),
+        "{passes} in {}",
+        r["wall_s"]
+    );
+}
+
 #[test]
 fn a_blow_up_stops_the_run_with_exit_code_3() {
     let o = hooke(&[

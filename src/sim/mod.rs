@@ -6,6 +6,7 @@ pub mod integrators;
 pub mod kernels;
 pub mod parallel;
 pub mod params;
+pub mod profile;
 pub mod schedule;
 pub mod solver;
 pub mod stability;
@@ -18,6 +19,7 @@ pub use components::*;
 pub use integrators::CgSettings;
 pub use parallel::SolverThreads;
 pub use params::*;
+pub use profile::PassTimes;
 pub use schedule::{
     PhysicsSet, PhysicsStep, SimPlugin, StepBudget, StepSet, TickPlan, advance, pack,
 };

@@ -1,0 +1,67 @@
+//! Where a step's time goes: wall time per pass, kept only when asked for (`hooke run
+//! --profile` inserts [`PassTimes`]; without it the marks do not run).
+//!
+//! A mark before the first pass and after each pass reads the clock; each pass is charged
+//! the time since the mark before it. The passes' own run conditions still apply, so a pass
+//! that does not run shows (almost) no time.
+
+use super::schedule::StepSet;
+use bevy::ecs::schedule::ScheduleConfigs;
+use bevy::ecs::system::ScheduleSystem;
+use bevy::prelude::*;
+use serde::Serialize;
+use std::time::Instant;
+
+/// Seconds of wall time spent in each pass of the step, summed over the steps run.
+#[derive(Resource, Debug, Default, Clone, Serialize, PartialEq)]
+pub struct PassTimes {
+    pub forces: f64,
+    pub integrate: f64,
+    pub damping: f64,
+    pub ground: f64,
+    pub advance: f64,
+    #[serde(skip)]
+    mark: Option<Instant>,
+}
+
+impl PassTimes {
+    pub fn total(&self) -> f64 {
+        self.forces + self.integrate + self.damping + self.ground + self.advance
+    }
+}
+
+fn start(mut times: ResMut<PassTimes>) {
+    times.mark = Some(Instant::now());
+}
+
+/// A mark that charges the time since the previous one to `pass`.
+fn lap(pass: fn(&mut PassTimes) -> &mut f64) -> impl FnMut(ResMut<PassTimes>) {
+    move |mut times: ResMut<PassTimes>| {
+        let now = Instant::now();
+        if let Some(mark) = times.mark {
+            *pass(&mut times) += (now - mark).as_secs_f64();
+        }
+        times.mark = Some(now);
+    }
+}
+
+/// The marks around the step's sets, for [`super::PhysicsStep`].
+pub fn marks() -> ScheduleConfigs<ScheduleSystem> {
+    (
+        start.before(StepSet::Forces),
+        lap(|t| &mut t.forces)
+            .after(StepSet::Forces)
+            .before(StepSet::Integrate),
+        lap(|t| &mut t.integrate)
+            .after(StepSet::Integrate)
+            .before(StepSet::Damping),
+        lap(|t| &mut t.damping)
+            .after(StepSet::Damping)
+            .before(StepSet::Ground),
+        lap(|t| &mut t.ground)
+            .after(StepSet::Ground)
+            .before(StepSet::Advance),
+        lap(|t| &mut t.advance).after(StepSet::Advance),
+    )
+        .distributive_run_if(resource_exists::<PassTimes>)
+}
