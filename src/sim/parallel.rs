@@ -217,8 +217,14 @@ fn segments(
 pub struct SpringBuffers {
     layout: Option<Layout>,
     /// Per part, the forces on particles outside its exclusive range, applied after.
-    boundary: Vec<Vec<(u32, DVec2)>>,
+    boundary: Vec<Recorded>,
 }
+
+/// One part's recorded forces, on a cache line (pair) of its own: the parts push to their
+/// lists at the same time, and two list headers sharing a line would bounce it between cores.
+#[derive(Debug, Default, Clone)]
+#[repr(align(128))]
+struct Recorded(Vec<(u32, DVec2)>);
 
 /// Splits `f` into one mutable slice per range; the ranges are disjoint, in any order.
 fn carve<'f>(
@@ -270,7 +276,9 @@ pub fn accumulate_spring_forces(
     let Some(layout) = buffers.layout.as_ref() else {
         return;
     };
-    buffers.boundary.resize_with(layout.parts.len(), Vec::new);
+    buffers
+        .boundary
+        .resize_with(layout.parts.len(), Default::default);
     let outs = carve(f, layout.parts.iter().map(|p| p.exclusive.clone()));
     pool.install(|| {
         (layout
@@ -279,6 +287,7 @@ pub fn accumulate_spring_forces(
             .zip(outs)
             .zip(buffers.boundary.par_iter_mut()))
         .for_each(|((part, out), boundary)| {
+            let boundary = &mut boundary.0;
             boundary.clear();
             let base = part.exclusive.start;
             for seg in &part.segments {
@@ -297,7 +306,7 @@ pub fn accumulate_spring_forces(
         });
     });
     for boundary in &buffers.boundary {
-        for &(i, v) in boundary {
+        for &(i, v) in &boundary.0 {
             f[i as usize] += v;
         }
     }
