@@ -34,7 +34,8 @@ pub unsafe fn for_each_spring_force(
     let mut quads = springs.chunks_exact(4);
     let mut f = [0.0f64; 8];
     for quad in &mut quads {
-        let short = four_forces(x, quad, &mut f);
+        // SAFETY: this function's caller guarantees AVX.
+        let short = unsafe { four_forces(x, quad, &mut f) };
         for (i, s) in quad.iter().enumerate() {
             let force = (short & (1 << i) == 0).then_some(DVec2::new(f[2 * i], f[2 * i + 1]));
             run.push((s.a, s.b), force, &mut add);
@@ -49,54 +50,60 @@ pub unsafe fn for_each_spring_force(
 /// Writes the forces on the a ends of four springs to `out` (x0, y0, x1, y1, ...) and returns a
 /// mask of the springs shorter than [`MIN_SPRING_LENGTH`] (bit i for spring i), whose forces
 /// are to be skipped, as in the scalar kernel.
-#[inline]
-#[target_feature(enable = "avx")]
-fn four_forces(x: &[DVec2], s: &[PackedSpring], out: &mut [f64; 8]) -> i32 {
-    let (s0, s1, s2, s3) = (&s[0], &s[1], &s[2], &s[3]);
-    let (a0, b0, a1, b1) = (
-        x[s0.a as usize],
-        x[s0.b as usize],
-        x[s1.a as usize],
-        x[s1.b as usize],
-    );
-    let (a2, b2, a3, b3) = (
-        x[s2.a as usize],
-        x[s2.b as usize],
-        x[s3.a as usize],
-        x[s3.b as usize],
-    );
-    // d = x_a − x_b, two springs per register: [d0, d1] and [d2, d3].
-    let d01 = _mm256_sub_pd(
-        _mm256_set_pd(a1.y, a1.x, a0.y, a0.x),
-        _mm256_set_pd(b1.y, b1.x, b0.y, b0.x),
-    );
-    let d23 = _mm256_sub_pd(
-        _mm256_set_pd(a3.y, a3.x, a2.y, a2.x),
-        _mm256_set_pd(b3.y, b3.x, b2.y, b2.x),
-    );
-    // hadd of the squares: [l0², l2², l1², l3²] (it works within 128-bit lanes).
-    let l = _mm256_sqrt_pd(_mm256_hadd_pd(
-        _mm256_mul_pd(d01, d01),
-        _mm256_mul_pd(d23, d23),
-    ));
-    // _mm256_set_pd takes the lanes high to low: these are in l's order [0, 2, 1, 3].
-    let neg_k = _mm256_set_pd(-s3.k, -s1.k, -s2.k, -s0.k);
-    let rest = _mm256_set_pd(s3.rest, s1.rest, s2.rest, s0.rest);
-    let c = _mm256_div_pd(_mm256_mul_pd(neg_k, _mm256_sub_pd(l, rest)), l);
-    // Each coefficient twice, back in spring order: [c0, c0, c1, c1] and [c2, c2, c3, c3].
-    let f01 = _mm256_mul_pd(d01, _mm256_unpacklo_pd(c, c));
-    let f23 = _mm256_mul_pd(d23, _mm256_unpackhi_pd(c, c));
-    // SAFETY: out holds eight f64: two unaligned 256-bit stores of four each.
+///
+/// Always inlined into the AVX loop (a call per quad cost ~5 % of the pass); a function with
+/// `target_feature` cannot be, so this one has none and inherits AVX from its caller.
+///
+/// # Safety
+/// The CPU must support AVX ([`available`]).
+#[inline(always)]
+unsafe fn four_forces(x: &[DVec2], s: &[PackedSpring], out: &mut [f64; 8]) -> i32 {
+    // SAFETY: the caller guarantees AVX; the stores write the eight f64 of `out`.
     unsafe {
+        let (s0, s1, s2, s3) = (&s[0], &s[1], &s[2], &s[3]);
+        let (a0, b0, a1, b1) = (
+            x[s0.a as usize],
+            x[s0.b as usize],
+            x[s1.a as usize],
+            x[s1.b as usize],
+        );
+        let (a2, b2, a3, b3) = (
+            x[s2.a as usize],
+            x[s2.b as usize],
+            x[s3.a as usize],
+            x[s3.b as usize],
+        );
+        // d = x_a − x_b, two springs per register: [d0, d1] and [d2, d3].
+        let d01 = _mm256_sub_pd(
+            _mm256_set_pd(a1.y, a1.x, a0.y, a0.x),
+            _mm256_set_pd(b1.y, b1.x, b0.y, b0.x),
+        );
+        let d23 = _mm256_sub_pd(
+            _mm256_set_pd(a3.y, a3.x, a2.y, a2.x),
+            _mm256_set_pd(b3.y, b3.x, b2.y, b2.x),
+        );
+        // hadd of the squares: [l0², l2², l1², l3²] (it works within 128-bit lanes).
+        let l = _mm256_sqrt_pd(_mm256_hadd_pd(
+            _mm256_mul_pd(d01, d01),
+            _mm256_mul_pd(d23, d23),
+        ));
+        // _mm256_set_pd takes the lanes high to low: these are in l's order [0, 2, 1, 3].
+        let neg_k = _mm256_set_pd(-s3.k, -s1.k, -s2.k, -s0.k);
+        let rest = _mm256_set_pd(s3.rest, s1.rest, s2.rest, s0.rest);
+        let c = _mm256_div_pd(_mm256_mul_pd(neg_k, _mm256_sub_pd(l, rest)), l);
+        // Each coefficient twice, back in spring order: [c0, c0, c1, c1] and [c2, c2, c3, c3].
+        let f01 = _mm256_mul_pd(d01, _mm256_unpacklo_pd(c, c));
+        let f23 = _mm256_mul_pd(d23, _mm256_unpackhi_pd(c, c));
+        // out holds eight f64: two unaligned 256-bit stores of four each.
         _mm256_storeu_pd(out.as_mut_ptr(), f01);
         _mm256_storeu_pd(out.as_mut_ptr().add(4), f23);
+        let short = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(
+            l,
+            _mm256_set1_pd(MIN_SPRING_LENGTH),
+        ));
+        // Lane order [0, 2, 1, 3] back to spring order: swap bits 1 and 2.
+        (short & 0b1001) | ((short & 0b0010) << 1) | ((short & 0b0100) >> 1)
     }
-    let short = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(
-        l,
-        _mm256_set1_pd(MIN_SPRING_LENGTH),
-    ));
-    // Lane order [0, 2, 1, 3] back to spring order: swap bits 1 and 2.
-    (short & 0b1001) | ((short & 0b0010) << 1) | ((short & 0b0100) >> 1)
 }
 
 #[cfg(test)]
