@@ -141,7 +141,9 @@ pub fn advance(x: &mut [DVec2], drift: &[DVec2], v: &[DVec2], dt: f64) -> bool {
     let mut finite = true;
     for ((x, u), v) in x.iter_mut().zip(drift).zip(v) {
         *x += *u * dt;
-        finite &= x.is_finite() & v.is_finite();
+        // Component by component with `&`: `DVec2::is_finite` short-circuits, and its
+        // branches kept this loop from vectorizing.
+        finite &= x.x.is_finite() & x.y.is_finite() & v.x.is_finite() & v.y.is_finite();
     }
     finite
 }
