@@ -66,12 +66,12 @@ impl SolverThreads {
         self.threads
     }
 
-    /// Runs `work` on one of the pool's threads (on the calling thread when there is no
-    /// pool), so that the parallel passes inside it start from a pool thread: they then share
-    /// their work with the pool's other threads directly, and no thread outside the pool waits
-    /// to be woken after each pass.
-    pub fn run<R: Send>(&self, work: impl FnOnce() -> R + Send) -> R {
-        match &self.pool {
+    /// Runs `work` on one of the pool's threads when a scene of `springs` springs is worth
+    /// sharing (else on the calling thread), so that the parallel passes inside it start from
+    /// a pool thread: they then share their work with the pool's other threads directly, and
+    /// no thread outside the pool waits to be woken after each pass.
+    pub fn run<R: Send>(&self, springs: usize, work: impl FnOnce() -> R + Send) -> R {
+        match self.pool_for(springs) {
             Some(pool) => pool.install(work),
             None => work(),
         }

@@ -380,7 +380,8 @@ fn advance_positions(
 fn run_steps(world: &mut World) {
     let steps = world.resource::<TickPlan>().steps_per_tick;
     let threads = world.resource::<SolverThreads>().clone();
-    threads.run(|| {
+    let springs = world.resource::<Solver>().spring_count();
+    threads.run(springs, || {
         world.schedule_scope(PhysicsStep, |world, schedule| {
             for _ in 0..steps {
                 schedule.run(world);
