@@ -122,7 +122,7 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
         app.insert_resource(sim::SolverThreads::new(t)?);
     }
     if overrides.profile {
-        app.init_resource::<sim::PassTimes>();
+        sim::profile::enable(&mut app);
     }
     let world = app.world_mut();
     load_into_world(world, loaded);

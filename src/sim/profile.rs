@@ -1,13 +1,11 @@
 //! Where a step's time goes: wall time per pass, kept only when asked for (`hooke run
-//! --profile` inserts [`PassTimes`]; without it the marks do not run).
+//! --profile` calls [`enable`]; without it the marks are not in the schedule at all).
 //!
 //! A mark before the first pass and after each pass reads the clock; each pass is charged
 //! the time since the mark before it. The passes' own run conditions still apply, so a pass
 //! that does not run shows (almost) no time.
 
-use super::schedule::StepSet;
-use bevy::ecs::schedule::ScheduleConfigs;
-use bevy::ecs::system::ScheduleSystem;
+use super::schedule::{PhysicsStep, StepSet};
 use bevy::prelude::*;
 use serde::Serialize;
 use std::time::Instant;
@@ -45,23 +43,26 @@ fn lap(pass: fn(&mut PassTimes) -> &mut f64) -> impl FnMut(ResMut<PassTimes>) {
     }
 }
 
-/// The marks around the step's sets, for [`super::PhysicsStep`].
-pub fn marks() -> ScheduleConfigs<ScheduleSystem> {
-    (
-        start.before(StepSet::Forces),
-        lap(|t| &mut t.forces)
-            .after(StepSet::Forces)
-            .before(StepSet::Integrate),
-        lap(|t| &mut t.integrate)
-            .after(StepSet::Integrate)
-            .before(StepSet::Damping),
-        lap(|t| &mut t.damping)
-            .after(StepSet::Damping)
-            .before(StepSet::Ground),
-        lap(|t| &mut t.ground)
-            .after(StepSet::Ground)
-            .before(StepSet::Advance),
-        lap(|t| &mut t.advance).after(StepSet::Advance),
-    )
-        .distributive_run_if(resource_exists::<PassTimes>)
+/// Adds [`PassTimes`] and the marks around the step's sets to an app built with
+/// [`super::SimPlugin`].
+pub fn enable(app: &mut App) {
+    app.init_resource::<PassTimes>();
+    app.edit_schedule(PhysicsStep, |schedule| {
+        schedule.add_systems((
+            start.before(StepSet::Forces),
+            lap(|t| &mut t.forces)
+                .after(StepSet::Forces)
+                .before(StepSet::Integrate),
+            lap(|t| &mut t.integrate)
+                .after(StepSet::Integrate)
+                .before(StepSet::Damping),
+            lap(|t| &mut t.damping)
+                .after(StepSet::Damping)
+                .before(StepSet::Ground),
+            lap(|t| &mut t.ground)
+                .after(StepSet::Ground)
+                .before(StepSet::Advance),
+            lap(|t| &mut t.advance).after(StepSet::Advance),
+        ));
+    });
 }

@@ -188,7 +188,6 @@ impl Plugin for SimPlugin {
                         .run_if(ground_enabled)
                         .in_set(StepSet::Ground),
                     advance_positions.in_set(StepSet::Advance),
-                    super::profile::marks(),
                 ));
         });
     }
