@@ -1,8 +1,8 @@
 //! Threads for the step's kernels.
 //!
 //! The spring pass evaluates each spring once and scatters without atomics: the packed springs
-//! are split into one contiguous chunk per thread; a thread writes f directly for the particles
-//! no other chunk touches and records the rest, which are added after (see
+//! are split into one contiguous part per thread; a part writes its own slice of f, the
+//! particles no other part touches, and records forces on the rest, which are added after (see
 //! [`accumulate_spring_forces`]).
 //! Per-particle passes split the particle arrays into chunks. Small scenes run serially: below
 //! [`PARALLEL_MIN_SPRINGS`] the cost of waking a thread exceeds the work.

@@ -2,10 +2,10 @@
 //!
 //! Per spring the pass needs a square root and a division, and their latency, not memory, is
 //! what bounds the scalar loop (measured with `perf annotate`: the loop waits on `divsd`). One
-//! `vsqrtpd` and one `vdivpd` serve four springs, and two such quads are in flight at once. The operations are the scalar kernel's, in the
-//! same order ([`super::kernels::spring_force`]: d = x_a − x_b, l = √(d·d), d · (−k (l − L) / l)),
-//! and IEEE square root and division are correctly rounded, so the forces are bit for bit the
-//! scalar ones. The gather of positions and the scatter of forces stay scalar.
+//! `vsqrtpd` and one `vdivpd` serve four springs, and two such quads are in flight at once.
+//! The operations are the scalar kernel's, in the same order ([`super::kernels::spring_force`]:
+//! d = x_a − x_b, l = √(d·d), d · (−k (l − L) / l)), and IEEE square root and division are
+//! correctly rounded, so the forces are bit for bit the scalar ones. The gather of positions and the scatter of forces stay scalar.
 
 #![cfg(target_arch = "x86_64")]
 
