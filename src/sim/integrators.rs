@@ -60,50 +60,85 @@ fn forces(
     springs: &[PackedSpring],
     g: DVec2,
 ) {
-    apply_gravity(f, mass, g);
+    threads.each(springs.len(), (&mut *f, mass), |(f, m)| {
+        apply_gravity(f, m, g)
+    });
     super::parallel::accumulate_spring_forces(threads, buffers, f, x, springs);
 }
 
 /// Velocity Verlet, kick-drift-kick, with a second force evaluation at x0 + dt v½.
 pub fn velocity_verlet(s: &mut Solver, dt: f64, gravity: DVec2, threads: &SolverThreads) {
-    let n = s.x.len();
-    s.scratch.fit(n);
-    let half = 0.5 * dt;
-    for i in 0..n {
-        let v_half = s.v[i] + s.f[i] * (half * s.inv_mass[i]);
-        s.drift[i] = v_half;
-        s.scratch.x[i] = s.x[i] + v_half * dt;
-    }
+    s.scratch.fit(s.x.len());
+    let (half, springs) = (0.5 * dt, s.springs.len());
     let sc = &mut s.scratch;
+    let data = (
+        &mut s.drift[..],
+        &mut sc.x[..],
+        &s.x[..],
+        &s.v[..],
+        &s.f[..],
+        &s.inv_mass[..],
+    );
+    threads.each(springs, data, |(u, xs, x, v, f, w)| {
+        for i in 0..u.len() {
+            let v_half = v[i] + f[i] * (half * w[i]);
+            u[i] = v_half;
+            xs[i] = x[i] + v_half * dt;
+        }
+    });
     let buffers = &mut s.spring_buffers;
     forces(
         threads, buffers, &mut sc.f, &sc.x, &s.mass, &s.springs, gravity,
     );
-    for i in 0..n {
-        s.v[i] = s.drift[i] + sc.f[i] * (half * s.inv_mass[i]);
-    }
+    let data = (&mut s.v[..], &s.drift[..], &sc.f[..], &s.inv_mass[..]);
+    threads.each(springs, data, |(v, u, f, w)| {
+        for i in 0..v.len() {
+            v[i] = u[i] + f[i] * (half * w[i]);
+        }
+    });
 }
 
 /// Classic RK4 on x' = v, v' = f(x)/m.
 pub fn rk4(s: &mut Solver, dt: f64, gravity: DVec2, threads: &SolverThreads) {
-    let n = s.x.len();
-    s.scratch.fit(n);
+    s.scratch.fit(s.x.len());
+    let springs = s.springs.len();
     let sc = &mut s.scratch;
     // Stage 1: (v0, a0).
-    for i in 0..n {
-        let a = s.f[i] * s.inv_mass[i];
-        sc.sum_u[i] = s.v[i];
-        sc.sum_a[i] = a;
-        sc.stage_v[i] = s.v[i];
-        sc.f[i] = a; // holds the previous stage's acceleration
-    }
-    // Stages 2..4: evaluate at x0 + c dt k_x(prev), with k_v(prev) advancing the velocity.
-    for (c, w) in [(0.5, 2.0), (0.5, 2.0), (1.0, 1.0)] {
-        for i in 0..n {
-            let (kx, ka) = (sc.stage_v[i], sc.f[i]);
-            sc.x[i] = s.x[i] + kx * (c * dt);
-            sc.stage_v[i] = s.v[i] + ka * (c * dt);
+    let data = (
+        &mut sc.sum_u[..],
+        &mut sc.sum_a[..],
+        &mut sc.stage_v[..],
+        &mut sc.f[..], // holds the previous stage's acceleration
+        &s.v[..],
+        &s.f[..],
+        &s.inv_mass[..],
+    );
+    threads.each(springs, data, |(sum_u, sum_a, stage_v, acc, v, f, w)| {
+        for i in 0..v.len() {
+            let a = f[i] * w[i];
+            sum_u[i] = v[i];
+            sum_a[i] = a;
+            stage_v[i] = v[i];
+            acc[i] = a;
         }
+    });
+    // Stages 2..4: evaluate at x0 + c dt k_x(prev), with k_v(prev) advancing the velocity.
+    for (c, weight) in [(0.5, 2.0), (0.5, 2.0), (1.0, 1.0)] {
+        let h = c * dt;
+        let data = (
+            &mut sc.x[..],
+            &mut sc.stage_v[..],
+            &sc.f[..],
+            &s.x[..],
+            &s.v[..],
+        );
+        threads.each(springs, data, |(xs, stage_v, acc, x, v)| {
+            for i in 0..x.len() {
+                let (kx, ka) = (stage_v[i], acc[i]);
+                xs[i] = x[i] + kx * h;
+                stage_v[i] = v[i] + ka * h;
+            }
+        });
         forces(
             threads,
             &mut s.spring_buffers,
@@ -113,16 +148,28 @@ pub fn rk4(s: &mut Solver, dt: f64, gravity: DVec2, threads: &SolverThreads) {
             &s.springs,
             gravity,
         );
-        for i in 0..n {
-            sc.f[i] *= s.inv_mass[i];
-            sc.sum_u[i] += sc.stage_v[i] * w;
-            sc.sum_a[i] += sc.f[i] * w;
+        let data = (
+            &mut sc.f[..],
+            &mut sc.sum_u[..],
+            &mut sc.sum_a[..],
+            &sc.stage_v[..],
+            &s.inv_mass[..],
+        );
+        threads.each(springs, data, |(acc, sum_u, sum_a, stage_v, w)| {
+            for i in 0..acc.len() {
+                acc[i] *= w[i];
+                sum_u[i] += stage_v[i] * weight;
+                sum_a[i] += acc[i] * weight;
+            }
+        });
+    }
+    let data = (&mut s.drift[..], &mut s.v[..], &sc.sum_u[..], &sc.sum_a[..]);
+    threads.each(springs, data, |(u, v, sum_u, sum_a)| {
+        for i in 0..u.len() {
+            u[i] = sum_u[i] / 6.0;
+            v[i] += sum_a[i] * (dt / 6.0);
         }
-    }
-    for i in 0..n {
-        s.drift[i] = sc.sum_u[i] / 6.0;
-        s.v[i] += sc.sum_a[i] * (dt / 6.0);
-    }
+    });
 }
 
 /// Settings of the implicit Euler solve.

@@ -84,13 +84,101 @@ impl SolverThreads {
             .filter(|_| springs >= PARALLEL_MIN_SPRINGS)
     }
 
-    /// The pool and a chunk length for the particle passes of a scene of `n` particles and
-    /// `springs` springs, when it is worth sharing.
-    pub fn chunking(&self, springs: usize, n: usize) -> Option<(&rayon::ThreadPool, usize)> {
-        let pool = self.pool_for(springs)?;
-        (n >= 2 * PARTICLE_CHUNK).then(|| (pool, n.div_ceil(self.threads).max(PARTICLE_CHUNK)))
+    /// Runs `pass` over `data` (particle arrays of equal length, see [`Split`]), in chunks on
+    /// the pool when a scene of `springs` springs is worth sharing, and combines the chunks'
+    /// results with `join`; else runs it once over everything.
+    pub fn chunked<S: Split, R: Send>(
+        &self,
+        springs: usize,
+        data: S,
+        pass: impl Fn(S) -> R + Sync,
+        join: impl Fn(R, R) -> R + Sync,
+    ) -> R {
+        let n = data.len();
+        match self.pool_for(springs) {
+            Some(pool) if n >= 2 * PARTICLE_CHUNK => {
+                let chunk = n.div_ceil(self.threads).max(PARTICLE_CHUNK);
+                pool.install(|| split_run(data, chunk, &pass, &join))
+            }
+            _ => pass(data),
+        }
+    }
+
+    /// [`Self::chunked`] for passes without a result.
+    pub fn each<S: Split>(&self, springs: usize, data: S, pass: impl Fn(S) + Sync) {
+        self.chunked(springs, data, pass, |(), ()| ());
     }
 }
+
+/// Halves `data` until its pieces are at most `chunk` long, running the halves in parallel.
+fn split_run<S: Split, R: Send>(
+    data: S,
+    chunk: usize,
+    pass: &(impl Fn(S) -> R + Sync),
+    join: &(impl Fn(R, R) -> R + Sync),
+) -> R {
+    if data.len() <= chunk {
+        return pass(data);
+    }
+    let mid = data.len().div_ceil(2);
+    let (left, right) = data.split_at(mid);
+    let (l, r) = rayon::join(
+        || split_run(left, chunk, pass, join),
+        || split_run(right, chunk, pass, join),
+    );
+    join(l, r)
+}
+
+/// Particle arrays cut at the same index: a slice, or a tuple of slices of equal length.
+pub trait Split: Send + Sized {
+    fn len(&self) -> usize;
+    fn split_at(self, mid: usize) -> (Self, Self);
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+impl<T: Sync> Split for &[T] {
+    fn len(&self) -> usize {
+        <[T]>::len(self)
+    }
+    fn split_at(self, mid: usize) -> (Self, Self) {
+        <[T]>::split_at(self, mid)
+    }
+}
+
+impl<T: Send> Split for &mut [T] {
+    fn len(&self) -> usize {
+        <[T]>::len(self)
+    }
+    fn split_at(self, mid: usize) -> (Self, Self) {
+        self.split_at_mut(mid)
+    }
+}
+
+macro_rules! split_tuple {
+    ($($t:ident $v:ident $l:ident $r:ident),+) => {
+        impl<$($t: Split),+> Split for ($($t,)+) {
+            fn len(&self) -> usize {
+                let ($($v,)+) = self;
+                let lens = [$($v.len()),+];
+                debug_assert!(lens.iter().all(|&l| l == lens[0]), "arrays of unequal length");
+                lens[0]
+            }
+            fn split_at(self, mid: usize) -> (Self, Self) {
+                let ($($v,)+) = self;
+                $(let ($l, $r) = $v.split_at(mid);)+
+                (($($l,)+), ($($r,)+))
+            }
+        }
+    };
+}
+split_tuple!(A a la ra, B b lb rb);
+split_tuple!(A a la ra, B b lb rb, C c lc rc);
+split_tuple!(A a la ra, B b lb rb, C c lc rc, D d ld rd);
+split_tuple!(A a la ra, B b lb rb, C c lc rc, D d ld rd, E e le re);
+split_tuple!(A a la ra, B b lb rb, C c lc rc, D d ld rd, E e le re, F f lf rf);
+split_tuple!(A a la ra, B b lb rb, C c lc rc, D d ld rd, E e le re, F f lf rf, G g lg rg);
 
 /// How the spring pass splits its work, cached until the springs or the thread count change.
 #[derive(Debug, Clone, PartialEq)]
@@ -421,6 +509,38 @@ mod tests {
             "{inner} of {}",
             springs.len()
         );
+    }
+
+    /// Chunked passes see matching pieces of every array, cover each element once, and combine
+    /// their results; small scenes run in one piece.
+    #[test]
+    fn chunked_passes_cover_the_arrays_in_matching_pieces() {
+        let n = 100_003;
+        let src: Vec<f64> = (0..n).map(|i| i as f64).collect();
+        let threads = SolverThreads::new(2).unwrap();
+        for springs in [PARALLEL_MIN_SPRINGS, 10] {
+            let (mut a, mut b) = (vec![0.0; n], vec![0.0; n]);
+            let pieces = threads.chunked(
+                springs,
+                (&mut a[..], &mut b[..], &src[..]),
+                |(a, b, src)| {
+                    for i in 0..a.len() {
+                        a[i] = src[i] + 1.0;
+                        b[i] += 2.0 * src[i];
+                    }
+                    1
+                },
+                |x, y| x + y,
+            );
+            assert!(a.iter().enumerate().all(|(i, &v)| v == i as f64 + 1.0));
+            assert!(b.iter().enumerate().all(|(i, &v)| v == 2.0 * i as f64));
+            let expected = if springs >= PARALLEL_MIN_SPRINGS {
+                2
+            } else {
+                1
+            };
+            assert_eq!(pieces, expected, "{springs} springs");
+        }
     }
 
     /// The threaded pass gives the serial forces up to the order of summation.

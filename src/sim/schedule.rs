@@ -15,7 +15,6 @@ use bevy::app::{FixedMain, RunFixedMainLoop, RunFixedMainLoopSystems};
 use bevy::ecs::schedule::{ScheduleLabel, SingleThreadedExecutor};
 use bevy::prelude::*;
 use bevy::time::Fixed;
-use rayon::prelude::*;
 use std::time::{Duration, Instant};
 
 /// The sets of a fixed tick, in `FixedUpdate`, in this order.
@@ -226,13 +225,9 @@ fn apply_gravity(
 ) {
     let s = &mut *solver;
     let g = params.gravity;
-    match threads.chunking(s.springs.len(), s.x.len()) {
-        None => kernels::apply_gravity(&mut s.f, &s.mass, g),
-        Some((pool, ch)) => pool.install(|| {
-            (s.f.par_chunks_mut(ch).zip(s.mass.par_chunks(ch)))
-                .for_each(|(f, m)| kernels::apply_gravity(f, m, g));
-        }),
-    }
+    threads.each(s.springs.len(), (&mut s.f[..], &s.mass[..]), |(f, m)| {
+        kernels::apply_gravity(f, m, g)
+    });
     n.gravity += 1;
 }
 
@@ -248,15 +243,10 @@ fn accumulate_spring_forces(
 
 /// v += dt f / m (the Euler methods' velocity update), in parallel chunks when worthwhile.
 fn kick(s: &mut Solver, dt: f64, threads: &SolverThreads) {
-    match threads.chunking(s.springs.len(), s.x.len()) {
-        None => kernels::kick(&mut s.v, &s.f, &s.inv_mass, dt),
-        Some((pool, ch)) => pool.install(|| {
-            (s.v.par_chunks_mut(ch)
-                .zip(s.f.par_chunks(ch))
-                .zip(s.inv_mass.par_chunks(ch)))
-            .for_each(|((v, f), w)| kernels::kick(v, f, w, dt));
-        }),
-    }
+    let data = (&mut s.v[..], &s.f[..], &s.inv_mass[..]);
+    threads.each(s.springs.len(), data, |(v, f, w)| {
+        kernels::kick(v, f, w, dt)
+    });
 }
 
 fn explicit_euler(
@@ -319,13 +309,7 @@ fn damp_velocity(
 ) {
     let s = &mut *solver;
     let (mu, dt) = (params.damping, params.dt);
-    match threads.chunking(s.springs.len(), s.x.len()) {
-        None => kernels::damp(&mut s.v, mu, dt),
-        Some((pool, ch)) => pool.install(|| {
-            s.v.par_chunks_mut(ch)
-                .for_each(|v| kernels::damp(v, mu, dt))
-        }),
-    }
+    threads.each(s.springs.len(), &mut s.v[..], |v| kernels::damp(v, mu, dt));
     n.damping += 1;
 }
 
@@ -337,15 +321,10 @@ fn ground_contact(
 ) {
     let Some(ground) = params.ground else { return };
     let s = &mut *solver;
-    match threads.chunking(s.springs.len(), s.x.len()) {
-        None => kernels::ground_contact(&mut s.x, &mut s.v, &s.inv_mass, ground),
-        Some((pool, ch)) => pool.install(|| {
-            (s.x.par_chunks_mut(ch)
-                .zip(s.v.par_chunks_mut(ch))
-                .zip(s.inv_mass.par_chunks(ch)))
-            .for_each(|((x, v), w)| kernels::ground_contact(x, v, w, ground));
-        }),
-    }
+    let data = (&mut s.x[..], &mut s.v[..], &s.inv_mass[..]);
+    threads.each(s.springs.len(), data, |(x, v, w)| {
+        kernels::ground_contact(x, v, w, ground)
+    });
     n.ground += 1;
 }
 
@@ -361,16 +340,12 @@ fn advance_positions(
         Integrator::SymplecticEuler | Integrator::ImplicitEuler => &s.v,
     };
     let dt = params.dt;
-    let finite = match threads.chunking(s.springs.len(), s.x.len()) {
-        None => kernels::advance(&mut s.x, drift, &s.v, dt),
-        Some((pool, ch)) => pool.install(|| {
-            (s.x.par_chunks_mut(ch)
-                .zip(drift.par_chunks(ch))
-                .zip(s.v.par_chunks(ch)))
-            .map(|((x, u), v)| kernels::advance(x, u, v, dt))
-            .reduce(|| true, |a, b| a & b)
-        }),
-    };
+    let finite = threads.chunked(
+        s.springs.len(),
+        (&mut s.x[..], &drift[..], &s.v[..]),
+        |(x, u, v)| kernels::advance(x, u, v, dt),
+        |a, b| a & b,
+    );
     s.non_finite = !finite;
     n.advance += 1;
 }
