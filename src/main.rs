@@ -73,6 +73,9 @@ enum BenchCommand {
         /// Spring updates per run (sets the number of steps).
         #[arg(long, default_value_t = 3e7)]
         budget: f64,
+        /// Runs per figure (the median is reported; thread counts alternate between runs).
+        #[arg(long, default_value_t = 3)]
+        repeat: usize,
     },
     /// Largest stable dt per hard scene and integrator (bisection) against the theoretical
     /// limit, and the energy change at half that dt; writes CSV and a markdown table.
@@ -142,7 +145,8 @@ fn main() -> ExitCode {
             out,
             threads,
             budget,
-        })) => perf(&out, threads, budget),
+            repeat,
+        })) => perf(&out, threads, budget, repeat),
         Some(Command::Bench(BenchCommand::Stability { out, scenes, steps })) => {
             stability(&out, &scenes, steps)
         }
@@ -259,7 +263,7 @@ fn work_precision(out: &std::path::Path, quick: bool) -> ExitCode {
     )
 }
 
-fn perf(out: &std::path::Path, mut threads: Vec<usize>, budget: f64) -> ExitCode {
+fn perf(out: &std::path::Path, mut threads: Vec<usize>, budget: f64, repeat: usize) -> ExitCode {
     use hooke::bench::perf;
     if threads.is_empty() {
         let all = std::thread::available_parallelism().map_or(1, |n| n.get());
@@ -271,10 +275,14 @@ fn perf(out: &std::path::Path, mut threads: Vec<usize>, budget: f64) -> ExitCode
     if !(budget.is_finite() && budget > 0.0) {
         return fail(format!("--budget must be finite and > 0, got {budget}"));
     }
+    if repeat == 0 {
+        return fail("--repeat must be at least 1");
+    }
     if let Err(e) = std::fs::create_dir_all(out) {
         return fail(format!("cannot create {}: {e}", out.display()));
     }
-    let (rows, loads) = match perf::run(&perf::WIDTHS, &threads, budget, |w| eprintln!("  {w}")) {
+    let progress = |w: &str| eprintln!("  {w}");
+    let (rows, loads) = match perf::run(&perf::WIDTHS, &threads, budget, repeat, progress) {
         Ok(r) => r,
         Err(e) => return fail(e),
     };
@@ -285,7 +293,7 @@ fn perf(out: &std::path::Path, mut threads: Vec<usize>, budget: f64) -> ExitCode
     };
     let list: Vec<String> = threads.iter().map(|t| t.to_string()).collect();
     let command = format!(
-        "hooke bench perf --threads {} --budget {budget:e}",
+        "hooke bench perf --threads {} --budget {budget:e} --repeat {repeat}",
         list.join(",")
     );
     let md = perf::markdown(&rows, &loads, &bounds, &command);

@@ -229,6 +229,23 @@ fn bad_flags() {
     }
 }
 
+/// `hooke bench perf` checks its flags before measuring anything.
+#[test]
+fn bad_bench_flags() {
+    let cases: [(&[&str], &str); 3] = [
+        (&["--repeat", "0"], "--repeat must be at least 1"),
+        (&["--threads", "1,0"], "--threads must be at least 1"),
+        (&["--budget=-1"], "--budget must be finite and > 0"),
+    ];
+    for (flags, needle) in cases {
+        let out = temp("bench-flags");
+        let mut args = vec!["bench", "perf", "--out", out.to_str().unwrap()];
+        args.extend_from_slice(flags);
+        assert_bad_input(&hooke(&args), needle);
+        assert!(!out.join("perf.csv").exists());
+    }
+}
+
 /// Every bad-scene case, through the real binary: exit code 2, and stderr names the file and
 /// the problem.
 #[test]

@@ -62,12 +62,14 @@ pub struct LoadTime {
     pub seconds: f64,
 }
 
-/// Runs the table. `budget` = spring updates per run (sets the steps); returns the rows and
-/// the load time of each cloth.
+/// Runs the table. `budget` = spring updates per run (sets the steps); each row is the median
+/// wall time of `repeats` runs, the thread counts alternating from run to run so that they
+/// share the machine's noise. Returns the rows and the load time of each cloth.
 pub fn run(
     widths: &[usize],
     threads: &[usize],
     budget: f64,
+    repeats: usize,
     mut progress: impl FnMut(&str),
 ) -> Result<(Vec<Row>, Vec<LoadTime>), String> {
     let mut rows = vec![];
@@ -87,18 +89,28 @@ pub fn run(
             seconds: start.elapsed().as_secs_f64(),
         });
         for integrator in Integrator::ALL {
-            for &t in threads {
-                world.insert_resource(SolverThreads::new(t)?);
-                world.resource_mut::<SimParams>().integrator = integrator;
-                let steps =
-                    (budget / (springs as f64 * cost(integrator))).clamp(10.0, 50_000.0) as u64;
-                progress(&format!(
-                    "{name}: {integrator}, {t} thread(s), {steps} steps"
-                ));
-                sim::advance(world, 2); // warm the buffers
-                let start = Instant::now();
-                let taken = sim::advance(world, steps);
-                let wall_s = start.elapsed().as_secs_f64();
+            world.resource_mut::<SimParams>().integrator = integrator;
+            let steps = (budget / (springs as f64 * cost(integrator))).clamp(10.0, 50_000.0) as u64;
+            progress(&format!(
+                "{name}: {integrator}, {steps} steps, {repeats} x threads {threads:?}"
+            ));
+            let pools = threads
+                .iter()
+                .map(|&t| SolverThreads::new(t))
+                .collect::<Result<Vec<_>, _>>()?;
+            let mut runs = vec![vec![]; threads.len()];
+            for _ in 0..repeats.max(1) {
+                for (pool, runs) in pools.iter().zip(&mut runs) {
+                    world.insert_resource(pool.clone());
+                    sim::advance(world, 2); // warm the buffers
+                    let start = Instant::now();
+                    let taken = sim::advance(world, steps);
+                    runs.push((start.elapsed().as_secs_f64(), taken));
+                }
+            }
+            for (&t, mut runs) in threads.iter().zip(runs) {
+                runs.sort_by(|a, b| a.0.total_cmp(&b.0));
+                let (wall_s, taken) = runs[runs.len() / 2];
                 let updates = springs as f64 * taken as f64;
                 rows.push(Row {
                     scene: name.clone(),
@@ -182,7 +194,8 @@ pub fn markdown(rows: &[Row], loads: &[LoadTime], bounds: &[Bound], command: &st
         "Made by `{command}`. Million spring updates per second (springs × steps / wall time) \
          for the full step schedule on cloths with damping and ground on; f64. A multi-stage \
          method updates each spring several times a step (Verlet 2, RK4 4, implicit Euler 1 \
-         plus its CG products), and is counted once per step here.\n"
+         plus its CG products), and is counted once per step here. Each figure is the median \
+         of the runs (thread counts alternating).\n"
     );
     let mut threads: Vec<usize> = rows.iter().map(|r| r.threads).collect();
     threads.sort_unstable();
