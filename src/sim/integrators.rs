@@ -202,6 +202,8 @@ pub struct Cg {
     diag: Vec<Sym2>,
     /// Per spring: its block of the stiffness matrix at the start of the step.
     blocks: Vec<Block>,
+    /// The threaded K u's split of the blocks.
+    buffers: SpringBuffers,
     pub iterations: u64,
     pub solves: u64,
     pub unconverged: u64,
@@ -229,17 +231,21 @@ impl Cg {
 /// preconditioned conjugate gradients, warm-started from the previous Δv. K is the spring
 /// Jacobian with the transverse term of compressed springs dropped (coefficient
 /// max(0, 1 − L/l)), which keeps M − dt² K symmetric positive definite. Pinned particles are
-/// held (their rows are projected out).
-pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings) {
+/// held (their rows are projected out). K u and the vector updates share the solver threads
+/// like the explicit passes; the reductions sum per chunk, so the thread count changes the
+/// result by round-off only.
+pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings, threads: &SolverThreads) {
     let n = s.x.len();
+    let springs = s.springs.len();
     let cg = &mut s.scratch.cg;
-    cg.fit(n, s.springs.len());
+    cg.fit(n, springs);
     let h2 = dt * dt;
+    let sum = |a: DVec2, b: DVec2| a + b;
 
     // Stiffness blocks at x0, and the preconditioner: the inverse of each particle's 2×2
     // diagonal block of A = M − dt² K (block Jacobi; a particle's springs pull it along their
     // directions, which a scalar diagonal cannot express).
-    stiffness::blocks(&s.springs, &s.x, &mut cg.blocks);
+    stiffness::blocks_threaded(threads, &s.springs, &s.x, &mut cg.blocks);
     for (d, &m) in cg.diag.iter_mut().zip(&s.mass) {
         *d = Sym2::scaled_identity(m);
     }
@@ -247,73 +253,117 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings) {
         cg.diag[block.a as usize].add_scaled(block.m, h2);
         cg.diag[block.b as usize].add_scaled(block.m, h2);
     }
-    for (d, &w) in cg.diag.iter_mut().zip(&s.inv_mass) {
-        *d = if w != 0.0 {
-            d.inverse_or_zero()
-        } else {
-            Sym2::default()
-        };
-    }
-
-    // b = dt (f0 + dt K v0), zero on pinned particles.
-    let free = |i: usize| s.inv_mass[i] != 0.0;
-    stiffness::apply(&mut cg.ap, &s.v, &cg.blocks); // ap = K v0
-    let mut b_norm2 = 0.0;
-    for i in 0..n {
-        let b = if free(i) {
-            (s.f[i] - cg.ap[i] * dt) * dt
-        } else {
-            DVec2::ZERO
-        };
-        cg.z[i] = b; // keep b in z for now
-        b_norm2 += b.length_squared();
-    }
-    // r = b − A dv (warm start).
-    for (dv, &w) in cg.dv.iter_mut().zip(&s.inv_mass) {
-        if w == 0.0 {
-            *dv = DVec2::ZERO;
+    threads.each(springs, (&mut cg.diag[..], &s.inv_mass[..]), |(diag, w)| {
+        for (d, &w) in diag.iter_mut().zip(w) {
+            *d = if w != 0.0 {
+                d.inverse_or_zero()
+            } else {
+                Sym2::default()
+            };
         }
-    }
-    apply_a(&mut cg.ap, &cg.dv, &cg.blocks, &s.mass, &s.inv_mass, h2);
-    let mut rz = DVec2::ZERO;
-    for ((((r, z), p), ap), d) in (cg.r.iter_mut().zip(&mut cg.z).zip(&mut cg.p))
-        .zip(&cg.ap)
-        .zip(&cg.diag)
-    {
-        *r = *z - *ap; // z holds b
-        *z = d.times(*r);
-        *p = *z;
-        rz += *r * *z;
-    }
-    let tol2 = settings.tolerance * settings.tolerance * b_norm2;
-    let mut rz = rz.element_sum();
-    let mut r2 = cg.r.iter().map(|r| r.length_squared()).sum::<f64>();
+    });
+
+    // b = dt (f0 + dt K v0), zero on pinned particles; z holds b for now.
+    stiffness::apply_threaded(threads, &mut cg.buffers, &mut cg.ap, &s.v, &cg.blocks); // K v0
+    let data = (&mut cg.z[..], &s.f[..], &cg.ap[..], &s.inv_mass[..]);
+    let b_norm2 = threads.chunked(
+        springs,
+        data,
+        |(z, f, kv, w)| {
+            let mut norm2 = DVec2::ZERO;
+            for i in 0..z.len() {
+                let b = if w[i] != 0.0 {
+                    (f[i] - kv[i] * dt) * dt
+                } else {
+                    DVec2::ZERO
+                };
+                z[i] = b;
+                norm2 += b * b;
+            }
+            norm2
+        },
+        sum,
+    );
+    // r = b − A dv (warm start).
+    threads.each(springs, (&mut cg.dv[..], &s.inv_mass[..]), |(dv, w)| {
+        for (dv, &w) in dv.iter_mut().zip(w) {
+            if w == 0.0 {
+                *dv = DVec2::ZERO;
+            }
+        }
+    });
+    // out = A u; returns u · A u.
+    let a_times = |out: &mut [DVec2], u: &[DVec2], buffers: &mut SpringBuffers, blocks| {
+        stiffness::apply_threaded(threads, buffers, out, u, blocks);
+        apply_a(threads, springs, out, u, &s.mass, &s.inv_mass, h2)
+    };
+    a_times(&mut cg.ap, &cg.dv, &mut cg.buffers, &cg.blocks);
+    let data = (
+        &mut cg.r[..],
+        &mut cg.z[..],
+        &mut cg.p[..],
+        &cg.ap[..],
+        &cg.diag[..],
+    );
+    let (r2, rz) = threads.chunked(
+        springs,
+        data,
+        |(r, z, p, ap, d)| {
+            let (mut r2, mut rz) = (DVec2::ZERO, DVec2::ZERO);
+            for i in 0..r.len() {
+                r[i] = z[i] - ap[i]; // z holds b
+                z[i] = d[i].times(r[i]);
+                p[i] = z[i];
+                r2 += r[i] * r[i];
+                rz += r[i] * z[i];
+            }
+            (r2, rz)
+        },
+        |a, b| (a.0 + b.0, a.1 + b.1),
+    );
+    let tol2 = settings.tolerance * settings.tolerance * b_norm2.element_sum();
+    let (mut r2, mut rz) = (r2.element_sum(), rz.element_sum());
     let mut iterations = 0;
     while r2 > tol2 && iterations < settings.max_iterations {
-        let pap = apply_a(&mut cg.ap, &cg.p, &cg.blocks, &s.mass, &s.inv_mass, h2);
+        let pap = a_times(&mut cg.ap, &cg.p, &mut cg.buffers, &cg.blocks);
         if !pap.is_finite() || pap <= 0.0 {
             break; // not positive definite along p, or non-finite: stop with what we have
         }
         let alpha = rz / pap;
         // Reductions in two lanes (x and y): a scalar sum is one long chain of additions.
-        let (mut r2_lanes, mut rz_lanes) = (DVec2::ZERO, DVec2::ZERO);
-        for ((((dv, r), z), p), (ap, d)) in (cg.dv.iter_mut().zip(&mut cg.r).zip(&mut cg.z))
-            .zip(&cg.p)
-            .zip(cg.ap.iter().zip(&cg.diag))
-        {
-            *dv += *p * alpha;
-            *r -= *ap * alpha;
-            *z = d.times(*r);
-            r2_lanes += *r * *r;
-            rz_lanes += *r * *z;
-        }
+        let data = (
+            &mut cg.dv[..],
+            &mut cg.r[..],
+            &mut cg.z[..],
+            &cg.p[..],
+            &cg.ap[..],
+            &cg.diag[..],
+        );
+        let (r2_lanes, rz_lanes) = threads.chunked(
+            springs,
+            data,
+            |(dv, r, z, p, ap, d)| {
+                let (mut r2, mut rz) = (DVec2::ZERO, DVec2::ZERO);
+                for i in 0..dv.len() {
+                    dv[i] += p[i] * alpha;
+                    r[i] -= ap[i] * alpha;
+                    z[i] = d[i].times(r[i]);
+                    r2 += r[i] * r[i];
+                    rz += r[i] * z[i];
+                }
+                (r2, rz)
+            },
+            |a, b| (a.0 + b.0, a.1 + b.1),
+        );
         r2 = r2_lanes.element_sum();
         let rz_new = rz_lanes.element_sum();
         let beta = rz_new / rz;
         rz = rz_new;
-        for (p, z) in cg.p.iter_mut().zip(&cg.z) {
-            *p = *z + *p * beta;
-        }
+        threads.each(springs, (&mut cg.p[..], &cg.z[..]), |(p, z)| {
+            for (p, z) in p.iter_mut().zip(z) {
+                *p = *z + *p * beta;
+            }
+        });
         iterations += 1;
     }
     cg.iterations += iterations as u64;
@@ -322,30 +372,40 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings) {
     if r2 > tol2 {
         cg.unconverged += 1;
     }
-    for i in 0..n {
-        s.v[i] += cg.dv[i];
-    }
+    threads.each(springs, (&mut s.v[..], &cg.dv[..]), |(v, dv)| {
+        for (v, dv) in v.iter_mut().zip(dv) {
+            *v += *dv;
+        }
+    });
 }
 
-/// ap = A u = M u + dt² K u (K the positive semi-definite stiffness), pinned rows held at 0.
-/// Returns u · ap.
+/// ap = A u = M u + dt² K u from ap = K u (K the positive semi-definite stiffness), pinned rows
+/// held at 0; returns u · A u.
 fn apply_a(
+    threads: &SolverThreads,
+    springs: usize,
     ap: &mut [DVec2],
     u: &[DVec2],
-    blocks: &[Block],
     mass: &[f64],
     inv_mass: &[f64],
     h2: f64,
 ) -> f64 {
-    stiffness::apply(ap, u, blocks);
-    let mut dot = DVec2::ZERO;
-    for (((ap, &u), &m), &w) in ap.iter_mut().zip(u).zip(mass).zip(inv_mass) {
-        *ap = if w != 0.0 {
-            u * m + *ap * h2
-        } else {
-            DVec2::ZERO
-        };
-        dot += u * *ap;
-    }
+    let dot = threads.chunked(
+        springs,
+        (ap, u, mass, inv_mass),
+        |(ap, u, m, w)| {
+            let mut dot = DVec2::ZERO;
+            for i in 0..ap.len() {
+                ap[i] = if w[i] != 0.0 {
+                    u[i] * m[i] + ap[i] * h2
+                } else {
+                    DVec2::ZERO
+                };
+                dot += u[i] * ap[i];
+            }
+            dot
+        },
+        |a, b| a + b,
+    );
     dot.element_sum()
 }

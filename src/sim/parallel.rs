@@ -211,7 +211,7 @@ struct Segment {
 const MIN_INNER_SEGMENT: usize = 64;
 
 impl Layout {
-    fn new(springs: &[PackedSpring], threads: usize) -> Layout {
+    fn new(springs: &[impl Pair], threads: usize) -> Layout {
         let chunk = springs.len().div_ceil(threads).max(1);
         let chunks: Vec<Range<usize>> = (0..springs.len())
             .step_by(chunk)
@@ -223,7 +223,7 @@ impl Layout {
                 springs[c.clone()]
                     .iter()
                     .fold((usize::MAX, 0), |(lo, hi), s| {
-                        let (a, b) = (s.a as usize, s.b as usize);
+                        let (a, b) = s.ends();
                         (lo.min(a).min(b), hi.max(a + 1).max(b + 1))
                     })
             })
@@ -270,13 +270,10 @@ fn exclusive_range(touched: &[(usize, usize)], t: usize) -> Range<usize> {
 }
 
 /// Cuts `chunk` into alternating inner and recording segments.
-fn segments(
-    springs: &[PackedSpring],
-    chunk: Range<usize>,
-    exclusive: &Range<usize>,
-) -> Vec<Segment> {
-    let inner = |s: &PackedSpring| {
-        exclusive.contains(&(s.a as usize)) && exclusive.contains(&(s.b as usize))
+fn segments<P: Pair>(springs: &[P], chunk: Range<usize>, exclusive: &Range<usize>) -> Vec<Segment> {
+    let inner = |s: &P| {
+        let (a, b) = s.ends();
+        exclusive.contains(&a) && exclusive.contains(&b)
     };
     let mut out: Vec<Segment> = Vec::new();
     let mut i = chunk.start;
@@ -335,14 +332,37 @@ fn carve<'f>(
     slices.into_iter().map(|(_, s)| s).collect()
 }
 
+/// Something joining two particles, in the packed order: a spring, or its stiffness block.
+pub trait Pair {
+    /// The two particles' dense indices.
+    fn ends(&self) -> (usize, usize);
+}
+
+impl Pair for PackedSpring {
+    fn ends(&self) -> (usize, usize) {
+        (self.a as usize, self.b as usize)
+    }
+}
+
+/// A pass that adds a contribution of each pair to its ends (the spring forces, K u).
+pub trait PairPass: Sync {
+    type Pair: Pair + Sync;
+    /// Calls `add(i, v)` for every contribution of `pairs`, in order.
+    fn run(&self, pairs: &[Self::Pair], add: impl FnMut(usize, DVec2));
+}
+
+/// The spring forces at positions `x`.
+struct SpringForces<'x>(&'x [DVec2]);
+
+impl PairPass for SpringForces<'_> {
+    type Pair = PackedSpring;
+    #[inline(always)]
+    fn run(&self, springs: &[PackedSpring], add: impl FnMut(usize, DVec2)) {
+        kernels::for_each_spring_force(self.0, springs, add);
+    }
+}
+
 /// f += Σ spring forces, each spring evaluated once, on the pool's threads when worthwhile.
-///
-/// The springs are split into one contiguous part per thread, and each part's particles into
-/// those no other part touches (its exclusive range, a slice of f of its own) and the rest.
-/// Within a part, runs of springs with both ends in the exclusive range (for a row-major
-/// cloth, all but about one row's springs at each end of the part) go through the serial
-/// kernel unchanged; the others record their forces on outside particles, which are added
-/// after the parallel part. No atomics, no unsafe, no full-size buffers: one parallel region.
 pub fn accumulate_spring_forces(
     threads: &SolverThreads,
     buffers: &mut SpringBuffers,
@@ -350,16 +370,36 @@ pub fn accumulate_spring_forces(
     x: &[DVec2],
     springs: &[PackedSpring],
 ) {
-    let Some(pool) = threads.pool_for(springs.len()) else {
-        kernels::accumulate_spring_forces(f, x, springs);
+    scatter(threads, buffers, f, springs, &SpringForces(x));
+}
+
+/// out += every contribution of `pass` over `pairs`, on the pool's threads when worthwhile.
+///
+/// The pairs are split into one contiguous part per thread, and each part's particles into
+/// those no other part touches (its exclusive range, a slice of `out` of its own) and the rest.
+/// Within a part, runs of pairs with both ends in the exclusive range (for a row-major cloth,
+/// all but about one row's springs at each end of the part) go through the serial kernel
+/// unchanged; the others record their contributions to outside particles, which are added
+/// after the parallel part. No atomics, no unsafe, no full-size buffers: one parallel region.
+/// `buffers` caches the split for these pairs; it is redone when their number or the thread
+/// count changes, and the solver starts new buffers whenever it repacks the springs.
+pub fn scatter<P: PairPass>(
+    threads: &SolverThreads,
+    buffers: &mut SpringBuffers,
+    out: &mut [DVec2],
+    pairs: &[P::Pair],
+    pass: &P,
+) {
+    let Some(pool) = threads.pool_for(pairs.len()) else {
+        pass.run(pairs, |i, v| out[i] += v);
         return;
     };
     let stale = buffers
         .layout
         .as_ref()
-        .is_none_or(|l| l.springs != springs.len() || l.threads != threads.threads);
+        .is_none_or(|l| l.springs != pairs.len() || l.threads != threads.threads);
     if stale {
-        buffers.layout = Some(Layout::new(springs, threads.threads));
+        buffers.layout = Some(Layout::new(pairs, threads.threads));
     }
     let Some(layout) = buffers.layout.as_ref() else {
         return;
@@ -367,7 +407,7 @@ pub fn accumulate_spring_forces(
     buffers
         .boundary
         .resize_with(layout.parts.len(), Default::default);
-    let outs = carve(f, layout.parts.iter().map(|p| p.exclusive.clone()));
+    let outs = carve(out, layout.parts.iter().map(|p| p.exclusive.clone()));
     pool.install(|| {
         (layout
             .parts
@@ -379,11 +419,11 @@ pub fn accumulate_spring_forces(
             boundary.clear();
             let base = part.exclusive.start;
             for seg in &part.segments {
-                let springs = &springs[seg.springs.clone()];
+                let pairs = &pairs[seg.springs.clone()];
                 if seg.inner {
-                    kernels::for_each_spring_force(x, springs, |i, v| out[i - base] += v);
+                    pass.run(pairs, |i, v| out[i - base] += v);
                 } else {
-                    kernels::for_each_spring_force(x, springs, |i, v| {
+                    pass.run(pairs, |i, v| {
                         match i.checked_sub(base).and_then(|j| out.get_mut(j)) {
                             Some(o) => *o += v,
                             None => boundary.push((i as u32, v)),
@@ -395,7 +435,7 @@ pub fn accumulate_spring_forces(
     });
     for boundary in &buffers.boundary {
         for &(i, v) in &boundary.0 {
-            f[i as usize] += v;
+            out[i as usize] += v;
         }
     }
 }

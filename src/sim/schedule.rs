@@ -295,9 +295,10 @@ fn implicit_euler(
     mut solver: ResMut<Solver>,
     params: Res<SimParams>,
     settings: Res<CgSettings>,
+    threads: Res<SolverThreads>,
     mut n: ResMut<PassCounts>,
 ) {
-    integrators::implicit_euler(&mut solver, params.dt, *settings);
+    integrators::implicit_euler(&mut solver, params.dt, *settings, &threads);
     n.integrate += 1;
 }
 

@@ -8,6 +8,7 @@
 //! [`super::kernels::MIN_SPRING_LENGTH`] contribute nothing.
 
 use super::kernels::{self, MIN_SPRING_LENGTH};
+use super::parallel::{self, Pair, PairPass, SolverThreads, SpringBuffers};
 use super::solver::PackedSpring;
 use bevy::math::DVec2;
 
@@ -93,14 +94,59 @@ pub fn blocks(springs: &[PackedSpring], x: &[DVec2], out: &mut Vec<Block>) {
     out.extend(springs.iter().map(|s| Block::of(s, x)));
 }
 
+/// [`blocks`] on the pool's threads when worthwhile.
+pub fn blocks_threaded(
+    threads: &SolverThreads,
+    springs: &[PackedSpring],
+    x: &[DVec2],
+    out: &mut Vec<Block>,
+) {
+    out.resize(springs.len(), Block::default());
+    threads.each(springs.len(), (&mut out[..], springs), |(out, springs)| {
+        for (o, s) in out.iter_mut().zip(springs) {
+            *o = Block::of(s, x);
+        }
+    });
+}
+
+impl Pair for Block {
+    fn ends(&self) -> (usize, usize) {
+        (self.a as usize, self.b as usize)
+    }
+}
+
+/// K u, block by block: each block adds m (u_a − u_b) to a and its negative to b.
+struct KTimes<'u>(&'u [DVec2]);
+
+impl PairPass for KTimes<'_> {
+    type Pair = Block;
+    #[inline(always)]
+    fn run(&self, blocks: &[Block], mut add: impl FnMut(usize, DVec2)) {
+        let u = self.0;
+        let mut run = kernels::Run::new(blocks.first().map(|b| b.a));
+        for block in blocks {
+            let g = block.m.times(u[block.a as usize] - u[block.b as usize]);
+            run.push((block.a, block.b), Some(g), &mut add);
+        }
+        run.finish(add);
+    }
+}
+
 /// out = K u.
 pub fn apply(out: &mut [DVec2], u: &[DVec2], blocks: &[Block]) {
     out.fill(DVec2::ZERO);
-    let mut add = |i: usize, g: DVec2| out[i] += g;
-    let mut run = kernels::Run::new(blocks.first().map(|b| b.a));
-    for block in blocks {
-        let g = block.m.times(u[block.a as usize] - u[block.b as usize]);
-        run.push((block.a, block.b), Some(g), &mut add);
-    }
-    run.finish(add);
+    KTimes(u).run(blocks, |i, g| out[i] += g);
+}
+
+/// out = K u on the pool's threads when worthwhile (see [`parallel::scatter`]); `buffers`
+/// caches the split of these blocks.
+pub fn apply_threaded(
+    threads: &SolverThreads,
+    buffers: &mut SpringBuffers,
+    out: &mut [DVec2],
+    u: &[DVec2],
+    blocks: &[Block],
+) {
+    threads.each(blocks.len(), &mut *out, |out| out.fill(DVec2::ZERO));
+    parallel::scatter(threads, buffers, out, blocks, &KTimes(u));
 }
