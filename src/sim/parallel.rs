@@ -583,6 +583,37 @@ mod tests {
         }
     }
 
+    /// K u through the threaded pair scatter gives the serial product up to round-off.
+    #[test]
+    fn threaded_stiffness_product_matches_the_serial_one() {
+        use crate::sim::stiffness;
+        let (n, springs) = (160 * 160, grid(160, 160));
+        let x = positions(n);
+        let mut blocks = vec![];
+        stiffness::blocks(&springs, &x, &mut blocks);
+        let u: Vec<DVec2> = (0..n)
+            .map(|i| DVec2::new((i % 13) as f64, -((i % 7) as f64)))
+            .collect();
+        let mut serial = vec![DVec2::ZERO; n as usize];
+        stiffness::apply(&mut serial, &u, &blocks);
+        let scale = serial
+            .iter()
+            .map(|f| f.abs().max_element())
+            .fold(0.0, f64::max);
+        let threads = SolverThreads::new(2).unwrap();
+        let (mut buffers, mut threaded_blocks) = (SpringBuffers::default(), vec![]);
+        stiffness::blocks_threaded(&threads, &springs, &x, &mut threaded_blocks);
+        assert_eq!(threaded_blocks, blocks);
+        let mut threaded = vec![DVec2::splat(f64::NAN); n as usize]; // overwritten, not added to
+        stiffness::apply_threaded(&threads, &mut buffers, &mut threaded, &u, &blocks);
+        for (i, (a, b)) in serial.iter().zip(&threaded).enumerate() {
+            assert!(
+                (*a - *b).abs().max_element() <= 1e-12 * scale,
+                "particle {i}: {a} vs {b}"
+            );
+        }
+    }
+
     /// The threaded pass gives the serial forces up to the order of summation.
     #[test]
     fn threaded_forces_match_the_serial_ones() {
