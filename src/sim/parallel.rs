@@ -597,20 +597,25 @@ mod tests {
             .collect();
         let mut serial = vec![DVec2::ZERO; n as usize];
         stiffness::apply(&mut serial, &u, &blocks);
-        let scale = serial
-            .iter()
-            .map(|f| f.abs().max_element())
-            .fold(0.0, f64::max);
         let threads = SolverThreads::new(2).unwrap();
         let (mut buffers, mut threaded_blocks) = (SpringBuffers::default(), vec![]);
         stiffness::blocks_threaded(&threads, &springs, &x, &mut threaded_blocks);
         assert_eq!(threaded_blocks, blocks);
         let mut threaded = vec![DVec2::splat(f64::NAN); n as usize]; // overwritten, not added to
         stiffness::apply_threaded(&threads, &mut buffers, &mut threaded, &u, &blocks);
-        for (i, (a, b)) in serial.iter().zip(&threaded).enumerate() {
+        assert_round_off(&serial, &threaded, "K u, 2 threads");
+    }
+
+    /// Each element of `threaded` within 1e-12 of the largest of `serial` from its own.
+    fn assert_round_off(serial: &[DVec2], threaded: &[DVec2], what: &str) {
+        let scale = serial
+            .iter()
+            .map(|f| f.abs().max_element())
+            .fold(0.0, f64::max);
+        for (i, (a, b)) in serial.iter().zip(threaded).enumerate() {
             assert!(
                 (*a - *b).abs().max_element() <= 1e-12 * scale,
-                "particle {i}: {a} vs {b}"
+                "{what}, particle {i}: {a} vs {b}"
             );
         }
     }
@@ -622,21 +627,12 @@ mod tests {
             let x = positions(n);
             let mut serial = vec![DVec2::ZERO; n as usize];
             kernels::accumulate_spring_forces(&mut serial, &x, &springs);
-            let scale = serial
-                .iter()
-                .map(|f| f.abs().max_element())
-                .fold(0.0, f64::max);
             for count in [2, 3] {
                 let threads = SolverThreads::new(count).unwrap();
                 let mut buffers = SpringBuffers::default();
                 let mut threaded = vec![DVec2::ZERO; n as usize];
                 accumulate_spring_forces(&threads, &mut buffers, &mut threaded, &x, &springs);
-                for (i, (a, b)) in serial.iter().zip(&threaded).enumerate() {
-                    assert!(
-                        (*a - *b).abs().max_element() <= 1e-12 * scale,
-                        "particle {i} with {count} threads: {a} vs {b}"
-                    );
-                }
+                assert_round_off(&serial, &threaded, &format!("forces, {count} threads"));
             }
         }
     }
