@@ -1,0 +1,94 @@
+#!/usr/bin/env python3
+"""hooke against the peer implementations (../shared/peer), side by side.
+
+The machines this was measured on are noisy (the same binary has measured 112 and 196 M
+spring updates/s a minute apart), so a figure is only worth comparing with one measured in the
+same minutes. This runs each contender once per round, alternating, for several rounds, and
+prints the range and median of each: the 256x256 cloth, f64, symplectic Euler, damping and
+ground on.
+
+    cargo build --release
+    ../shared/peer/setup.sh                      # the peers' Python environment, once
+    scripts/side_by_side.py --rounds 8           # hooke and Taichi at 1 and 2 threads
+    scripts/side_by_side.py --rounds 3 --all     # also Warp (CPU) and NumPy, 1 thread
+
+Standard library only. Exits 2 with a message when a contender cannot be run.
+"""
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+
+
+def parse_args():
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--rounds", type=int, default=8, help="alternating rounds (default 8)")
+    p.add_argument("--threads", default="1,2", help="thread counts, comma-separated (default 1,2)")
+    p.add_argument("--hooke", default=os.path.join(ROOT, "target", "release", "hooke"),
+                   help="the hooke binary (default target/release/hooke)")
+    p.add_argument("--peer", default=os.path.join(ROOT, "..", "shared", "peer"),
+                   help="the peer directory, with its .venv (default ../shared/peer)")
+    p.add_argument("--all", action="store_true", help="also Warp and NumPy (one thread each)")
+    a = p.parse_args()
+    try:
+        a.threads = [int(t) for t in a.threads.split(",")]
+    except ValueError:
+        p.error(f"--threads: not a comma-separated list of integers: {a.threads!r}")
+    if a.rounds < 1 or any(t < 1 for t in a.threads):
+        p.error("--rounds and every --threads value must be at least 1")
+    return a
+
+
+def fail(msg):
+    print(f"side_by_side: {msg}", file=sys.stderr)
+    sys.exit(2)
+
+
+def last_json(cmd, cwd=None):
+    """Runs cmd and returns its last JSON line, parsed."""
+    r = subprocess.run(cmd, capture_output=True, text=True, cwd=cwd)
+    lines = [l for l in r.stdout.splitlines() if l.startswith("{")]
+    if r.returncode != 0 or not lines:
+        fail(f"{' '.join(cmd)} failed ({r.returncode}): {r.stderr.strip()[-400:]}")
+    return json.loads(lines[-1])
+
+
+def main():
+    a = parse_args()
+    python = os.path.join(a.peer, ".venv", "bin", "python")
+    if not os.access(a.hooke, os.X_OK):
+        fail(f"no hooke binary at {a.hooke}: run `cargo build --release` first")
+    if not os.access(python, os.X_OK):
+        fail(f"no peer environment at {python}: run {os.path.join(a.peer, 'setup.sh')} first")
+    scene = os.path.join(ROOT, "assets", "scenes", "bench", "cloth256.ron")
+    peer = lambda script, steps, t: [python, os.path.join(a.peer, script), "--size", "256", "256",
+                                     "--steps", str(steps), "--threads", str(t), "--fp", "64"]
+    contenders = []
+    for t in a.threads:
+        contenders.append((f"hooke", t, [a.hooke, "run", "--scene", scene, "--steps", "600",
+                                         "--threads", str(t), "--json"]))
+        contenders.append(("taichi-gather", t, peer("bench_taichi.py", 575, t)))
+    if a.all:
+        contenders.append(("warp-cpu", 1, peer("bench_warp.py", 300, 1)))
+        contenders.append(("numpy", 1, peer("bench_numpy.py", 40, 1)))
+    results = {(name, t): [] for name, t, _ in contenders}
+    for r in range(a.rounds):
+        for name, t, cmd in contenders:
+            d = last_json(cmd)
+            results[(name, t)].append(d["spring_updates_per_s"] / 1e6)
+        print(f"round {r + 1}/{a.rounds} done", file=sys.stderr)
+    print("M spring updates/s, 256x256 cloth, f64, symplectic Euler; range (median) over "
+          f"{a.rounds} alternating rounds")
+    print(f"{'implementation':15s} {'threads':>7s} {'min':>7s} {'median':>7s} {'max':>7s}")
+    for (name, t), v in results.items():
+        print(f"{name:15s} {t:7d} {min(v):7.1f} {statistics.median(v):7.1f} {max(v):7.1f}")
+
+
+if __name__ == "__main__":
+    main()
