@@ -262,3 +262,56 @@ fn two_threads_give_the_one_thread_result() {
         );
     }
 }
+
+/// Springs removed and added between ticks of a threaded run (the thread split is redone when
+/// the springs are repacked) give the one-thread result too.
+#[test]
+fn edits_between_ticks_keep_two_threads_equal_to_one() {
+    let scene = hooke::bench::perf::cloth(80);
+    for integrator in [Integrator::SymplecticEuler, Integrator::ImplicitEuler] {
+        let run = |threads: usize| {
+            let mut s = scene.clone();
+            s.integrator = integrator;
+            let mut app = app_with(s);
+            app.insert_resource(hooke::sim::SolverThreads::new(threads).unwrap());
+            step(&mut app, 20);
+            let (gone, ends): (Vec<_>, Vec<_>) = {
+                let sv = solver(&app);
+                let gone = sv.spring_entities.iter().step_by(97).copied().collect();
+                let ends = (0..40).map(|i| (sv.entities[i * 150], sv.entities[i * 150 + 81]));
+                (gone, ends.collect())
+            };
+            let expected = solver(&app).spring_count() - gone.len() + ends.len();
+            let world = app.world_mut();
+            for e in gone {
+                world.despawn(e);
+            }
+            for (a, b) in ends {
+                let serial = world.resource_mut::<hooke::sim::Serials>().next_serial();
+                world.spawn(Spring {
+                    a,
+                    b,
+                    rest: 0.01,
+                    stiffness: 5e3,
+                    serial,
+                });
+            }
+            step(&mut app, 20);
+            let sv = solver(&app);
+            assert_eq!(sv.spring_count(), expected, "the edits reached the solver");
+            (sv.spring_count(), sv.x.clone())
+        };
+        let ((n1, one), (n2, two)) = (run(1), run(2));
+        assert_eq!(n1, n2);
+        assert!(n1 > hooke::sim::parallel::PARALLEL_MIN_SPRINGS);
+        let worst = one
+            .iter()
+            .zip(&two)
+            .map(|(a, b)| a.distance(*b))
+            .fold(0.0, f64::max);
+        assert!(
+            worst < 1e-12,
+            "{integrator}: threads change positions by {worst:e} m after edits"
+        );
+    }
+}
