@@ -240,40 +240,45 @@ fn switching_the_integrator_mid_run_is_seamless() {
 /// integrator (the 80×80 cloth has 25k springs: above the threshold for threads).
 #[test]
 fn two_threads_give_the_one_thread_result() {
-    let scene = hooke::bench::perf::cloth(80);
     for integrator in Integrator::ALL {
         let run = |threads: usize| {
-            let mut s = scene.clone();
-            s.integrator = integrator;
-            let mut app = app_with(s);
-            app.insert_resource(hooke::sim::SolverThreads::new(threads).unwrap());
+            let mut app = cloth80(integrator, threads);
             step(&mut app, 40);
             solver(&app).x.clone()
         };
-        let (one, two) = (run(1), run(2));
-        let worst = one
-            .iter()
-            .zip(&two)
-            .map(|(a, b)| a.distance(*b))
-            .fold(0.0, f64::max);
-        assert!(
-            worst < 1e-12,
-            "{integrator}: threads change positions by {worst:e} m"
-        );
+        assert_same_positions(&run(1), &run(2), &integrator.to_string());
     }
+}
+
+/// The 80×80 cloth with `integrator`, on `threads` solver threads.
+fn cloth80(integrator: Integrator, threads: usize) -> bevy::app::App {
+    let mut scene = hooke::bench::perf::cloth(80);
+    scene.integrator = integrator;
+    let mut app = app_with(scene);
+    app.insert_resource(hooke::sim::SolverThreads::new(threads).unwrap());
+    app
+}
+
+/// Positions within 1e-12 m of each other.
+fn assert_same_positions(one: &[DVec2], two: &[DVec2], what: &str) {
+    let worst = one
+        .iter()
+        .zip(two)
+        .map(|(a, b)| a.distance(*b))
+        .fold(0.0, f64::max);
+    assert!(
+        worst < 1e-12,
+        "{what}: threads change positions by {worst:e} m"
+    );
 }
 
 /// Springs removed and added between ticks of a threaded run (the thread split is redone when
 /// the springs are repacked) give the one-thread result too.
 #[test]
 fn edits_between_ticks_keep_two_threads_equal_to_one() {
-    let scene = hooke::bench::perf::cloth(80);
     for integrator in [Integrator::SymplecticEuler, Integrator::ImplicitEuler] {
         let run = |threads: usize| {
-            let mut s = scene.clone();
-            s.integrator = integrator;
-            let mut app = app_with(s);
-            app.insert_resource(hooke::sim::SolverThreads::new(threads).unwrap());
+            let mut app = cloth80(integrator, threads);
             step(&mut app, 20);
             let (gone, ends): (Vec<_>, Vec<_>) = {
                 let sv = solver(&app);
@@ -304,14 +309,6 @@ fn edits_between_ticks_keep_two_threads_equal_to_one() {
         let ((n1, one), (n2, two)) = (run(1), run(2));
         assert_eq!(n1, n2);
         assert!(n1 > hooke::sim::parallel::PARALLEL_MIN_SPRINGS);
-        let worst = one
-            .iter()
-            .zip(&two)
-            .map(|(a, b)| a.distance(*b))
-            .fold(0.0, f64::max);
-        assert!(
-            worst < 1e-12,
-            "{integrator}: threads change positions by {worst:e} m after edits"
-        );
+        assert_same_positions(&one, &two, &format!("{integrator}, after edits"));
     }
 }
