@@ -1,11 +1,11 @@
 //! Threads for the step's kernels.
 //!
-//! The spring pass evaluates each spring once and scatters without atomics: the packed springs
-//! are split into one contiguous part per thread; a part writes its own slice of f, the
-//! particles no other part touches, and records forces on the rest, which are added after (see
-//! [`accumulate_spring_forces`]).
-//! Per-particle passes split the particle arrays into chunks. Small scenes run serially: below
-//! [`PARALLEL_MIN_SPRINGS`] the cost of waking a thread exceeds the work.
+//! Pair passes (the spring forces, implicit Euler's K u) evaluate each spring once and scatter
+//! without atomics: the packed springs are split into one contiguous part per thread; a part
+//! writes its own slice of the output, the particles no other part touches, and records its
+//! contributions to the rest, which are added after (see [`scatter`]). Per-particle passes
+//! split the particle arrays into chunks ([`SolverThreads::chunked`]). Small scenes run
+//! serially: below [`PARALLEL_MIN_SPRINGS`] the cost of waking a thread exceeds the work.
 
 use super::kernels;
 use super::solver::PackedSpring;
@@ -181,7 +181,7 @@ split_tuple!(A a la ra, B b lb rb, C c lc rc, D d ld rd, E e le re);
 split_tuple!(A a la ra, B b lb rb, C c lc rc, D d ld rd, E e le re, F f lf rf);
 split_tuple!(A a la ra, B b lb rb, C c lc rc, D d ld rd, E e le re, F f lf rf, G g lg rg);
 
-/// How the spring pass splits its work, cached until the springs or the thread count change.
+/// How a pair pass splits its work, cached until the pairs or the thread count change.
 #[derive(Debug, Clone, PartialEq)]
 struct Layout {
     springs: usize,
@@ -189,7 +189,7 @@ struct Layout {
     parts: Vec<Part>,
 }
 
-/// One thread's share of the spring pass.
+/// One thread's share of a pair pass.
 #[derive(Debug, Clone, PartialEq)]
 struct Part {
     /// The particles no other part touches: this part adds into them directly.
@@ -298,7 +298,7 @@ fn segments<P: Pair>(springs: &[P], chunk: Range<usize>, exclusive: &Range<usize
     out
 }
 
-/// The spring pass's per-thread state, reused from step to step.
+/// A pair pass's per-thread state, reused from step to step.
 #[derive(Debug, Default, Clone)]
 pub struct SpringBuffers {
     layout: Option<Layout>,
