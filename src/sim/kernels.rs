@@ -29,11 +29,6 @@ pub fn spring_force(s: &PackedSpring, x: &[DVec2]) -> Option<DVec2> {
     Some(d * (-s.k * (l - s.rest) / l))
 }
 
-/// f_a += the spring force and f_b -= it, each spring evaluated once.
-pub fn accumulate_spring_forces(f: &mut [DVec2], x: &[DVec2], springs: &[PackedSpring]) {
-    for_each_spring_force(x, springs, |i, v| f[i] += v);
-}
-
 /// Calls `add(i, force)` with every spring's forces on its ends: four springs at a time where
 /// the CPU has AVX (see [`super::wide`]; the same IEEE operations, so the same bits), else one
 /// by one.

@@ -626,7 +626,7 @@ mod tests {
         for (n, springs) in [(160 * 160, grid(160, 160)), (5000, tangle(5000, 30_000))] {
             let x = positions(n);
             let mut serial = vec![DVec2::ZERO; n as usize];
-            kernels::accumulate_spring_forces(&mut serial, &x, &springs);
+            kernels::for_each_spring_force(&x, &springs, |i, v| serial[i] += v);
             for count in [2, 3] {
                 let threads = SolverThreads::new(count).unwrap();
                 let mut buffers = SpringBuffers::default();
