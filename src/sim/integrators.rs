@@ -240,7 +240,9 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings, threads: &S
     let cg = &mut s.scratch.cg;
     cg.fit(n, springs);
     let h2 = dt * dt;
+    // The chunks' partial sums (two lanes each), combined.
     let sum = |a: DVec2, b: DVec2| a + b;
+    let sum_pairs = |a: (DVec2, DVec2), b: (DVec2, DVec2)| (a.0 + b.0, a.1 + b.1);
 
     // Stiffness blocks at x0, and the preconditioner: the inverse of each particle's 2×2
     // diagonal block of A = M − dt² K (block Jacobi; a particle's springs pull it along their
@@ -319,7 +321,7 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings, threads: &S
             }
             (r2, rz)
         },
-        |a, b| (a.0 + b.0, a.1 + b.1),
+        sum_pairs,
     );
     let tol2 = settings.tolerance * settings.tolerance * b_norm2.element_sum();
     let (mut r2, mut rz) = (r2.element_sum(), rz.element_sum());
@@ -353,7 +355,7 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings, threads: &S
                 }
                 (r2, rz)
             },
-            |a, b| (a.0 + b.0, a.1 + b.1),
+            sum_pairs,
         );
         r2 = r2_lanes.element_sum();
         let rz_new = rz_lanes.element_sum();
