@@ -5,7 +5,12 @@
 //! * [`scene`]: the RON scene format, generators, validation and loading.
 //! * [`runner`]: headless runs of a scene (`hooke run`).
 //! * [`bench`]: measured reports (`hooke bench ...`).
-//! * `ui` (feature `gui`): the desktop app ([`ui::AppPlugin`]).
+//! * `ui` (feature `gui`): the desktop app ([`ui::AppPlugin`]): panel, pointer gestures (grab,
+//!   add, cut, attract), keyboard edits, undo history, zoom and pan.
+//!
+//! Outside forces enter through one input: each particle's [`sim::ExternalForce`], which the
+//! solver adds wherever it evaluates forces (every stage of every integrator). The app's mouse
+//! attraction writes it; so can any user system (wind, a field).
 
 pub mod bench;
 pub mod runner;

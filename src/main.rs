@@ -114,6 +114,9 @@ struct RunArgs {
     /// Damping rate μ, 1/s (overrides the scene's).
     #[arg(long)]
     damping: Option<f64>,
+    /// Tearing: break springs stretched past (1 + STRAIN) × rest (overrides the scene's).
+    #[arg(long, value_name = "STRAIN")]
+    tear: Option<f64>,
     /// Solver threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
@@ -173,6 +176,7 @@ fn run(args: RunArgs) -> ExitCode {
         dt: args.dt,
         stiffness: args.stiffness,
         damping: args.damping,
+        tear: args.tear,
         threads: args.threads,
         profile: args.profile,
     };
@@ -204,6 +208,9 @@ fn run(args: RunArgs) -> ExitCode {
             r.energy_start,
             r.energy_end
         );
+        if r.springs_torn > 0 {
+            println!("{} springs tore", r.springs_torn);
+        }
         if let Some(t) = &r.pass_seconds {
             let share = |s: f64| 100.0 * s / t.total().max(1e-12);
             println!(

@@ -22,6 +22,8 @@ pub struct Overrides {
     pub dt: Option<f64>,
     pub stiffness: Option<f64>,
     pub damping: Option<f64>,
+    /// Tearing strain (overrides the scene's `tear`).
+    pub tear: Option<f64>,
     /// Solver threads (default: all cores).
     pub threads: Option<usize>,
     /// Time each pass of the step (the report's `pass_seconds`).
@@ -39,6 +41,9 @@ impl Overrides {
         }
         if let Some(mu) = self.damping.filter(|m| !(m.is_finite() && *m >= 0.0)) {
             return Err(format!("--damping must be finite and >= 0, got {mu}"));
+        }
+        if let Some(s) = self.tear.filter(|s| !(s.is_finite() && *s > 0.0)) {
+            return Err(format!("--tear must be finite and > 0, got {s}"));
         }
         if self.threads == Some(0) {
             return Err("--threads must be at least 1".into());
@@ -73,6 +78,8 @@ pub struct RunReport {
     /// Gershgorin upper bound on ω_max, rad/s.
     pub omega_max_bound: f64,
     pub finite: bool,
+    /// Springs broken by tearing during the run (0 when tearing is off).
+    pub springs_torn: u64,
     /// Mean conjugate-gradient iterations per step (implicit Euler only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub cg_iterations_per_step: Option<f64>,
@@ -139,6 +146,9 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
             p.damping = mu;
         }
         p.stiffness_override = overrides.stiffness;
+        if overrides.tear.is_some() {
+            p.tear = overrides.tear;
+        }
     }
     let params = world.resource::<SimParams>().clone();
     let steps = match duration {
@@ -194,6 +204,7 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
             .then_some(stability.stable_dt),
         omega_max_bound: stability.omega_bound,
         finite: blowup_step.is_none() && solver.state_is_finite(),
+        springs_torn: world.resource::<sim::Tearing>().torn,
         cg_iterations_per_step: solver.scratch.cg_iterations_per_step(),
         pass_seconds: world.get_resource::<sim::PassTimes>().cloned(),
         blowup_step,

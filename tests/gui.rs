@@ -17,6 +17,10 @@ impl Drop for Killed {
     }
 }
 
+/// The GUI tests run one at a time: each takes a display and the cores, and keyboard focus
+/// belongs to one window.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 fn have(tool: &str) -> bool {
     Command::new("sh")
         .args(["-c", &format!("command -v {tool}")])
@@ -174,6 +178,7 @@ fn pixels_around(png: &Path, x: i64, y: i64, r: i64) -> Vec<(u8, u8, u8)> {
 
 #[test]
 fn app_starts_draws_and_accepts_clicks() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let in_ci = std::env::var_os("CI").is_some();
     let Some((display, _xvfb)) = display() else {
         assert!(!in_ci, "CI must provide Xvfb for the GUI test");
@@ -301,4 +306,375 @@ fn app_starts_draws_and_accepts_clicks() {
         .filter(|&&(r, g, b)| r > 220 && g > 150 && b < 100)
         .count();
     assert!(orange > 0, "no pinned dot at the rope's end: {around:?}");
+}
+
+/// One running app under Xvfb, driven by real input (xdotool) and checked through its status
+/// report.
+struct Session {
+    display: String,
+    window: String,
+    report: PathBuf,
+    log: PathBuf,
+    app: Killed,
+}
+
+impl Session {
+    fn start(display: &str, scene: &str, dir: &Path) -> Session {
+        let report = dir.join(format!("{scene}-session.json"));
+        let log = dir.join(format!("{scene}-session.log"));
+        let mut app = launch(display, scene, &report, &log);
+        wait_for("the app's first frames", Duration::from_secs(180), || {
+            if let Ok(Some(code)) = app.0.try_wait() {
+                panic!("the app exited early ({code})");
+            }
+            status(&report).is_some_and(|s| s["fps"].as_f64().unwrap_or(0.0) > 0.0)
+        });
+        let window = hooke_window(display);
+        let s = Session {
+            display: display.to_string(),
+            window,
+            report,
+            log,
+            app,
+        };
+        s.x(&["windowfocus", "--sync", &s.window]);
+        s
+    }
+
+    fn x(&self, args: &[&str]) -> String {
+        xdotool(&self.display, args)
+    }
+
+    fn status(&self) -> serde_json::Value {
+        let mut last = None;
+        wait_for("a status report", Duration::from_secs(30), || {
+            last = status(&self.report);
+            last.is_some()
+        });
+        last.unwrap()
+    }
+
+    /// Waits for the next report written after now, then for `ok` to hold.
+    fn expect(&self, what: &str, ok: impl Fn(&serde_json::Value) -> bool) -> serde_json::Value {
+        let mut last = serde_json::Value::Null;
+        let deadline = Instant::now() + Duration::from_secs(60);
+        std::thread::sleep(Duration::from_millis(700));
+        loop {
+            if let Some(s) = status(&self.report) {
+                if ok(&s) {
+                    return s;
+                }
+                last = s;
+            }
+            assert!(
+                Instant::now() < deadline,
+                "timed out waiting for {what}: {last}"
+            );
+            std::thread::sleep(Duration::from_millis(200));
+        }
+    }
+
+    /// Moves the pointer to a world point, through the mapping the app reports now.
+    fn move_to(&self, x: f64, y: f64) {
+        let view = self.status()["view"].clone();
+        let (wx, wy) = world_to_window(&view, x, y);
+        self.x(&[
+            "mousemove",
+            "--window",
+            &self.window,
+            &wx.to_string(),
+            &wy.to_string(),
+        ]);
+        std::thread::sleep(Duration::from_millis(150));
+    }
+
+    fn move_px(&self, wx: i64, wy: i64) {
+        self.x(&[
+            "mousemove",
+            "--window",
+            &self.window,
+            &wx.to_string(),
+            &wy.to_string(),
+        ]);
+        std::thread::sleep(Duration::from_millis(150));
+    }
+
+    fn key(&self, key: &str) {
+        self.x(&["windowfocus", "--sync", &self.window]);
+        self.x(&["key", key]);
+    }
+
+    /// Drags with `button` from world point a to world point b in `steps` moves.
+    fn drag(&self, button: &str, a: (f64, f64), b: (f64, f64), steps: usize) {
+        self.move_to(a.0, a.1);
+        self.x(&["mousedown", button]);
+        std::thread::sleep(Duration::from_millis(200));
+        for i in 1..=steps {
+            let t = i as f64 / steps as f64;
+            self.move_to(a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
+        }
+        std::thread::sleep(Duration::from_millis(300));
+        self.x(&["mouseup", button]);
+    }
+
+    fn log(&self) -> String {
+        std::fs::read_to_string(&self.log).unwrap_or_default()
+    }
+}
+
+/// Window coordinates of a world point: center + (world − world_center) · scale, y flipped.
+fn world_to_window(view: &serde_json::Value, x: f64, y: f64) -> (i64, i64) {
+    let f = |v: &serde_json::Value| v.as_f64().unwrap();
+    let scale = f(&view["scale"]);
+    let (cx, cy) = (f(&view["center"][0]), f(&view["center"][1]));
+    let (wx, wy) = (f(&view["world_center"][0]), f(&view["world_center"][1]));
+    (
+        (cx + (x - wx) * scale).round() as i64,
+        (cy - (y - wy) * scale).round() as i64,
+    )
+}
+
+fn window_to_world(view: &serde_json::Value, px: f64, py: f64) -> (f64, f64) {
+    let f = |v: &serde_json::Value| v.as_f64().unwrap();
+    let scale = f(&view["scale"]);
+    let (cx, cy) = (f(&view["center"][0]), f(&view["center"][1]));
+    let (wx, wy) = (f(&view["world_center"][0]), f(&view["world_center"][1]));
+    (wx + (px - cx) / scale, wy - (py - cy) / scale)
+}
+
+fn positions(s: &serde_json::Value) -> Vec<(f64, f64)> {
+    s["positions"]
+        .as_array()
+        .expect("positions in the report")
+        .iter()
+        .map(|p| (p[0].as_f64().unwrap(), p[1].as_f64().unwrap()))
+        .collect()
+}
+
+fn counts(s: &serde_json::Value) -> (u64, u64, u64) {
+    (
+        s["particles"].as_u64().unwrap(),
+        s["springs"].as_u64().unwrap(),
+        s["pinned"].as_u64().unwrap(),
+    )
+}
+
+/// The ERROR lines, and the WARN lines that name hooke, in a log.
+fn bad_lines(log: &str) -> Vec<&str> {
+    log.lines()
+        .filter(|l| l.contains("ERROR") || (l.contains("WARN") && l.contains("hooke")))
+        .collect()
+}
+
+/// Every control, with real input, checked by the state the app reports; and a quiet log.
+#[test]
+fn every_control_works_under_real_input_and_the_log_stays_quiet() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let in_ci = std::env::var_os("CI").is_some();
+    let Some((display, _xvfb)) = display() else {
+        assert!(!in_ci, "CI must provide Xvfb for the GUI test");
+        println!("skipped: no DISPLAY and no Xvfb on this machine");
+        return;
+    };
+    if !have("xdotool") {
+        assert!(!in_ci, "CI must install xdotool");
+        println!("skipped: xdotool is not installed");
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("hooke-controls-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let s = Session::start(&display, "empty", &dir);
+    // The empty canvas renders a while with nothing in it.
+    std::thread::sleep(Duration::from_secs(2));
+    assert!(bad_lines(&s.log()).is_empty(), "empty canvas:\n{}", s.log());
+
+    // Left click on empty canvas: three particles joined within 0.15, the first pinned.
+    for (i, &(x, y)) in [(0.5, 0.8), (0.6, 0.8), (0.55, 0.7)].iter().enumerate() {
+        s.move_to(x, y);
+        s.x(&["click", "1"]);
+        s.expect(&format!("particle {}", i + 1), |st| {
+            st["particles"] == i + 1
+        });
+    }
+    assert_eq!(counts(&s.status()), (3, 3, 1));
+
+    // Shift + click: a pinned particle, too far from the others to be joined.
+    s.move_to(0.3, 0.45);
+    s.x(&["keydown", "shift", "click", "1", "keyup", "shift"]);
+    s.expect("a pinned particle", |st| counts(st) == (4, 3, 2));
+
+    // A press on a particle grabs it (adds nothing); the drag ends at the cursor (paused).
+    s.drag("1", (0.6, 0.8), (0.7, 0.6), 8);
+    let st = s.expect("the dragged particle at the cursor", |st| {
+        let p = positions(st)[1];
+        (p.0 - 0.7).abs() < 0.01 && (p.1 - 0.6).abs() < 0.01
+    });
+    assert_eq!(counts(&st), (4, 3, 2), "a grab adds nothing");
+    let px = 1.0 / st["view"]["scale"].as_f64().unwrap();
+    let p = positions(&st)[1];
+    assert!(
+        (p.0 - 0.7).abs() < 1.5 * px && (p.1 - 0.6).abs() < 1.5 * px,
+        "{p:?}"
+    );
+
+    // P pins, and P again frees, the particle under the cursor.
+    s.move_to(0.55, 0.7);
+    s.key("p");
+    s.expect("P pins", |st| counts(st).2 == 3);
+    s.key("p");
+    s.expect("P frees", |st| counts(st).2 == 2);
+
+    // X deletes the particle under the cursor (the lone pinned one: no springs).
+    let before_delete = positions(&s.status());
+    s.move_to(0.3, 0.45);
+    s.key("x");
+    s.expect("X deletes", |st| counts(st) == (3, 3, 1));
+
+    // Ctrl + drag cuts exactly the springs the path crosses: at y = 0.75 from x = 0.45 to
+    // 0.54 it crosses (0.5, 0.8)-(0.55, 0.7) only; (0.5, 0.8)-(0.7, 0.6) passes y = 0.75 at
+    // x = 0.55.
+    s.x(&["keydown", "ctrl"]);
+    s.drag("1", (0.45, 0.75), (0.54, 0.75), 6);
+    s.x(&["keyup", "ctrl"]);
+    s.expect("one spring cut", |st| counts(st) == (3, 2, 1));
+
+    // Undo and redo: the cut, then the delete, back exactly.
+    s.key("ctrl+z");
+    s.expect("undo the cut", |st| counts(st) == (3, 3, 1));
+    s.key("ctrl+shift+z");
+    s.expect("redo the cut", |st| counts(st) == (3, 2, 1));
+    s.key("ctrl+z");
+    s.expect("undo the cut again", |st| counts(st) == (3, 3, 1));
+    s.key("ctrl+y");
+    s.expect("ctrl+y redoes", |st| counts(st) == (3, 2, 1));
+    s.key("ctrl+z");
+    s.key("ctrl+z");
+    let st = s.expect("undo the delete", |st| counts(st) == (4, 3, 2));
+    assert_eq!(
+        positions(&st),
+        before_delete,
+        "the delete undone to the bit"
+    );
+    s.key("ctrl+shift+z");
+    s.key("ctrl+shift+z");
+    s.expect("both redone", |st| counts(st) == (3, 2, 1));
+
+    // The wheel zooms about the cursor: the world point under it stays put, and a click after
+    // zooming lands where it points.
+    let view0 = s.status()["view"].clone();
+    let (cx, cy) = world_to_window(&view0, 0.8, 0.4);
+    s.move_px(cx, cy);
+    s.x(&["click", "--repeat", "3", "--delay", "80", "4"]);
+    let st = s.expect("zoomed in", |st| {
+        st["view"]["scale"].as_f64().unwrap() > 1.5 * view0["scale"].as_f64().unwrap()
+    });
+    let (ux, uy) = window_to_world(&st["view"], cx as f64, cy as f64);
+    let px = 1.0 / st["view"]["scale"].as_f64().unwrap();
+    assert!(
+        (ux - 0.8).abs() < 2.0 * px && (uy - 0.4).abs() < 2.0 * px,
+        "({ux}, {uy}) under the cursor after zooming"
+    );
+    s.move_to(0.8, 0.45);
+    s.x(&["click", "1"]);
+    let st = s.expect("a particle added at the zoomed view", |st| {
+        counts(st).0 == 4
+    });
+    let p = *positions(&st).last().unwrap();
+    assert!(
+        (p.0 - 0.8).abs() < 1.5 * px && (p.1 - 0.45).abs() < 1.5 * px,
+        "clicked (0.8, 0.45), got {p:?}"
+    );
+
+    // Middle drag pans: the world moves with the cursor.
+    let view1 = s.status()["view"].clone();
+    let (ax, ay) = world_to_window(&view1, 0.9, 0.3);
+    s.move_px(ax, ay);
+    s.x(&["mousedown", "2"]);
+    for i in 1..=5 {
+        s.move_px(ax - 16 * i, ay + 8 * i);
+    }
+    s.x(&["mouseup", "2"]);
+    let st = s.expect("panned", |st| {
+        st["view"]["world_center"] != view1["world_center"]
+    });
+    let scale = st["view"]["scale"].as_f64().unwrap();
+    let moved = (
+        st["view"]["world_center"][0].as_f64().unwrap()
+            - view1["world_center"][0].as_f64().unwrap(),
+        st["view"]["world_center"][1].as_f64().unwrap()
+            - view1["world_center"][1].as_f64().unwrap(),
+    );
+    assert!(
+        (moved.0 - 80.0 / scale).abs() < 2.0 / scale
+            && (moved.1 - 40.0 / scale).abs() < 2.0 / scale,
+        "pan moved the view by {moved:?}"
+    );
+
+    // F fits the scene: the unit square fills the canvas again.
+    s.key("f");
+    let st = s.expect("fitted", |st| {
+        let v = &st["view"];
+        (v["world_center"][0].as_f64().unwrap() - 0.5).abs() < 1e-6
+            && (v["scale"].as_f64().unwrap() - view0["scale"].as_f64().unwrap()).abs() < 1e-3
+    });
+    assert_eq!(counts(&st).0, 4);
+
+    // H and ? show and hide the list of controls.
+    s.key("h");
+    s.expect("help shown", |st| st["help"] == true);
+    s.key("question");
+    s.expect("help hidden", |st| st["help"] == false);
+
+    // The right button attracts: run, let the free particles fall to the ground, then hold
+    // the button just above the one added last; it rises toward the cursor.
+    s.key("g");
+    s.expect("running and settled", |st| {
+        st["paused"] == false && positions(st).last().unwrap().1 < 0.01
+    });
+    let x_last = positions(&s.status()).last().unwrap().0;
+    s.move_to(x_last, 0.08);
+    s.x(&["mousedown", "3"]);
+    let st = s.expect("pulled up by the attraction", |st| {
+        st["attracting"] == true && positions(st).last().unwrap().1 > 0.03
+    });
+    assert_eq!(st["external_force"], true);
+    s.x(&["mouseup", "3"]);
+    s.expect("attraction released", |st| {
+        st["attracting"] == false && st["external_force"] == false
+    });
+
+    // C clears; undo brings it all back.
+    s.key("c");
+    s.expect("cleared", |st| counts(st) == (0, 0, 0));
+    s.key("ctrl+z");
+    s.expect("the clear undone", |st| counts(st).0 == 4);
+
+    // A resize keeps the mapping consistent and the log quiet.
+    s.x(&["windowsize", &s.window, "1000", "700"]);
+    s.expect("resized", |st| {
+        st["view"]["center"][1].as_f64().unwrap() < 360.0
+    });
+    std::thread::sleep(Duration::from_secs(1));
+    let bad = bad_lines(&s.log()).join("\n");
+    assert!(
+        bad.is_empty(),
+        "the log has errors or warnings of ours:\n{bad}"
+    );
+    drop(s.app);
+
+    // cloth32: grab and cut a cloth while it runs; still a quiet log.
+    let s = Session::start(&display, "cloth32", &dir);
+    s.drag("1", (0.5, 0.5), (0.8, 0.3), 6);
+    let springs0 = s.expect("the grab over", |st| st["held"] == 0)["springs"]
+        .as_u64()
+        .unwrap();
+    s.x(&["keydown", "ctrl"]);
+    s.drag("1", (0.3, 0.95), (0.3, 0.6), 6);
+    s.x(&["keyup", "ctrl"]);
+    s.expect("the cloth cut", |st| counts(st).1 < springs0);
+    let bad = bad_lines(&s.log()).join("\n");
+    assert!(
+        bad.is_empty(),
+        "cloth32's log has errors or warnings of ours:\n{bad}"
+    );
 }

@@ -24,7 +24,8 @@ fn systems_for_unused_features_do_not_run() {
             integrate: 250,
             damping: 0,
             ground: 0,
-            advance: 250
+            advance: 250,
+            tear: 0,
         }
     );
 

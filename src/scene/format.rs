@@ -26,6 +26,9 @@ pub struct Scene {
     /// Start the app paused (the assignment's empty canvas does).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub start_paused: bool,
+    /// Tearing: `Some(strain)` breaks a spring stretched past (1 + strain) × rest.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tear: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -149,6 +152,7 @@ impl Default for Scene {
             generate: vec![],
             click: None,
             start_paused: false,
+            tear: p.tear,
         }
     }
 }

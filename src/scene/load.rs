@@ -113,6 +113,29 @@ pub struct CurrentScene(pub LoadedScene);
 /// Replaces everything in the world's simulation with the scene: despawns all particles and
 /// springs, sets the parameters, resets clock, status and counters, and spawns the scene.
 pub fn load_into_world(world: &mut World, loaded: &LoadedScene) {
+    let s = &loaded.scene;
+    let params = SimParams {
+        gravity: DVec2::from(s.gravity),
+        damping: s.damping,
+        ground: s.ground,
+        integrator: s.integrator,
+        dt: s.dt,
+        paused: s.start_paused,
+        stiffness_override: None,
+        tear: s.tear,
+    };
+    replace_contents(world, params, &loaded.expanded);
+    world.insert_resource(SimClock::default());
+    world.insert_resource(SimStatus::default());
+    world.insert_resource(PassCounts::default());
+    world.insert_resource(Tearing::default());
+    world.insert_resource(CurrentScene(loaded.clone()));
+}
+
+/// Despawns every particle and spring, sets the parameters and spawns `expanded` in their
+/// place (the solver repacks on the next tick). Clock, status and counters are left alone:
+/// a scene load resets them, an undo restores its own.
+pub fn replace_contents(world: &mut World, params: SimParams, expanded: &Expanded) {
     let old: Vec<Entity> = world
         .query_filtered::<Entity, Or<(With<Particle>, With<Spring>)>>()
         .iter(world)
@@ -120,23 +143,9 @@ pub fn load_into_world(world: &mut World, loaded: &LoadedScene) {
     for e in old {
         world.despawn(e);
     }
-    let s = &loaded.scene;
-    let paused = s.start_paused;
-    *world.resource_mut::<SimParams>() = SimParams {
-        gravity: DVec2::from(s.gravity),
-        damping: s.damping,
-        ground: s.ground,
-        integrator: s.integrator,
-        dt: s.dt,
-        paused,
-        stiffness_override: None,
-    };
-    world.insert_resource(SimClock::default());
-    world.insert_resource(SimStatus::default());
-    world.insert_resource(PassCounts::default());
+    *world.resource_mut::<SimParams>() = params;
     world.insert_resource(Solver::default());
-    spawn_expanded(world, &loaded.expanded);
-    world.insert_resource(CurrentScene(loaded.clone()));
+    spawn_expanded(world, expanded);
 }
 
 /// Spawns particles and springs; springs index into the particles given here.
@@ -185,8 +194,32 @@ pub fn spawn_expanded(world: &mut World, expanded: &Expanded) -> Vec<Entity> {
 }
 
 /// The world's current particles and springs as an explicit scene (for saving what a user made).
+/// Springs carry the stiffness in effect (the override, when set).
 pub fn snapshot(world: &mut World) -> Scene {
     let params = world.resource::<SimParams>().clone();
+    let state = explicit_state(world, params.stiffness_override);
+    let click = world
+        .get_resource::<CurrentScene>()
+        .and_then(|c| c.0.scene.click);
+    Scene {
+        gravity: (params.gravity.x, params.gravity.y),
+        damping: params.damping,
+        ground: params.ground,
+        integrator: params.integrator,
+        dt: params.dt,
+        particles: state.particles,
+        springs: state.springs,
+        generate: vec![],
+        click,
+        start_paused: false,
+        tear: params.tear,
+    }
+}
+
+/// Every particle and spring in creation order, springs by particle index: what
+/// [`spawn_expanded`] takes to make the same network again. Springs get `stiffness` when it is
+/// set, else their own. Springs whose ends are not both particles are left out.
+pub fn explicit_state(world: &mut World, stiffness: Option<f64>) -> Expanded {
     let mut particles: Vec<(u64, Entity, super::format::ParticleDef)> = world
         .query::<(Entity, &Particle, &Position, &Velocity, &Mass, Has<Pinned>)>()
         .iter(world)
@@ -213,27 +246,16 @@ pub fn snapshot(world: &mut World) -> Scene {
             let def = super::format::SpringDef {
                 a: *index.get(&s.a)?,
                 b: *index.get(&s.b)?,
-                stiffness: params.stiffness_override.unwrap_or(s.stiffness),
+                stiffness: stiffness.unwrap_or(s.stiffness),
                 rest: s.rest,
             };
             Some((s.serial, def))
         })
         .collect();
     springs.sort_by_key(|s| s.0);
-    let click = world
-        .get_resource::<CurrentScene>()
-        .and_then(|c| c.0.scene.click);
-    Scene {
-        gravity: (params.gravity.x, params.gravity.y),
-        damping: params.damping,
-        ground: params.ground,
-        integrator: params.integrator,
-        dt: params.dt,
+    Expanded {
         particles: particles.into_iter().map(|p| p.2).collect(),
         springs: springs.into_iter().map(|s| s.1).collect(),
-        generate: vec![],
-        click,
-        start_paused: false,
     }
 }
 

@@ -8,5 +8,8 @@ pub mod validate;
 
 pub use format::*;
 pub use generate::Expanded;
-pub use load::{CurrentScene, LoadedScene, SceneError, load_into_world, snapshot, to_ron};
+pub use load::{
+    CurrentScene, LoadedScene, SceneError, explicit_state, load_into_world, replace_contents,
+    snapshot, spawn_expanded, to_ron,
+};
 pub use validate::validate;

@@ -29,6 +29,9 @@ pub fn validate(scene: &Scene) -> Result<Expanded, Vec<String>> {
     if !(scene.dt.is_finite() && scene.dt > 0.0) {
         p.push(format!("dt: must be finite and > 0, got {}", scene.dt));
     }
+    if let Some(s) = scene.tear.filter(|s| !(s.is_finite() && *s > 0.0)) {
+        p.push(format!("tear: the strain must be finite and > 0, got {s}"));
+    }
     if let Some(c) = &scene.click {
         if !(c.radius.is_finite() && c.radius >= 0.0) {
             p.push(format!(

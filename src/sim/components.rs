@@ -10,7 +10,7 @@ use bevy::prelude::*;
 /// Marks a particle. `serial` is its creation order: the solver orders particles by it, so that
 /// scene order (CSV rows, summation order) survives archetype moves such as pinning.
 #[derive(Component, Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-#[require(Position, Velocity, Mass, Force, SolverIndex)]
+#[require(Position, Velocity, Mass, Force, ExternalForce, SolverIndex)]
 pub struct Particle {
     pub serial: u64,
 }
@@ -37,6 +37,22 @@ impl Default for Mass {
 /// Written back by the solver for inspection; editing it has no effect.
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
 pub struct Force(pub DVec2);
+
+/// A force from outside the spring network, in newtons: wind, the app's mouse attraction, a
+/// user's own field. The solver adds it to gravity wherever it evaluates forces, so every
+/// integrator sees it at every stage (velocity Verlet's second evaluation, RK4's four, implicit
+/// Euler's right-hand side). It is held constant over a fixed tick: write it from a system in
+/// `Update` or `FixedUpdate` before [`crate::sim::PhysicsSet::Prepare`]. A scene where every
+/// external force is zero pays nothing for it.
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+pub struct ExternalForce(pub DVec2);
+
+/// A particle moved by the user, not by forces: the integrators treat it as having infinite
+/// mass (like [`Pinned`]) but it keeps the velocity written to its [`Velocity`], and moves with
+/// it during the tick. The app's grab inserts it while the button is held. Adding or removing
+/// it patches the solver in place (no repack).
+#[derive(Component, Debug, Clone, Copy, Default)]
+pub struct Kinematic;
 
 /// A pinned particle never moves and keeps zero velocity.
 #[derive(Component, Debug, Clone, Copy, Default)]

@@ -1,6 +1,6 @@
-//! A uniform hash grid for "every particle within r of p" queries (adding a particle by click):
-//! with cells of side r a query visits 3×3 cells, O(1) per neighbour instead of a scan of every
-//! particle.
+//! A uniform hash grid for "every particle within r of p" queries (adding a particle by click)
+//! and "every item near this segment" (cutting springs): with cells of side r a point query
+//! visits 3×3 cells, O(1) per neighbour instead of a scan of every particle.
 
 use bevy::math::DVec2;
 use bevy::platform::collections::HashMap;
@@ -34,6 +34,25 @@ impl<T: Copy> SpatialGrid<T> {
     pub fn insert(&mut self, p: DVec2, item: T) {
         if p.is_finite() {
             self.cells.entry(self.key(p)).or_default().push((p, item));
+        }
+    }
+
+    /// How many cells the box from `min` to `max` overlaps.
+    pub fn cells_in_box(&self, min: DVec2, max: DVec2) -> f64 {
+        let (a, b) = (self.key(min), self.key(max));
+        (b.0 - a.0 + 1) as f64 * (b.1 - a.1 + 1) as f64
+    }
+
+    /// Calls `visit` with every item in the cells that the box from `min` to `max` overlaps
+    /// (a superset of the items inside it).
+    pub fn in_box(&self, min: DVec2, max: DVec2, mut visit: impl FnMut(DVec2, T)) {
+        let (a, b) = (self.key(min), self.key(max));
+        for x in a.0..=b.0 {
+            for y in a.1..=b.1 {
+                for &(p, item) in self.cells.get(&(x, y)).into_iter().flatten() {
+                    visit(p, item);
+                }
+            }
         }
     }
 

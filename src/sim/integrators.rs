@@ -11,12 +11,17 @@
 //! | RK4 | 4 | v0 + dt/6 (a1 + 2a2 + 2a3 + a4) | (v0 + 2 v2 + 2 v3 + v4)/6 |
 //! | implicit Euler | 1 + CG | (M − dt² K) Δv = dt (f0 + dt K v0) | v1 (after damping and contact) |
 //!
-//! with a = f/m, and a = 0 for pinned particles (inverse mass 0). The Euler methods' velocity
-//! update is the plain kick `v += dt f/m` ([`super::kernels::kick`]), run by the schedule.
+//! with a = f/m, and a = 0 for pinned and kinematic particles (inverse mass 0; a kinematic one
+//! keeps its velocity, a pinned one has none). The Euler methods' velocity update is the plain
+//! kick `v += dt f/m` ([`super::kernels::kick`]), run by the schedule.
+//!
+//! Every force evaluation, each stage's included, starts from [`body_forces`]: gravity plus the
+//! particles' [`super::ExternalForce`], held constant over the step. Implicit Euler sees it in f0
+//! (its Jacobian has no external term: an external force is taken as independent of x).
 
-use super::kernels::apply_gravity;
+use super::kernels::{apply_gravity, apply_gravity_and_external};
 use super::parallel::{SolverThreads, SpringBuffers};
-use super::solver::{PackedSpring, Solver};
+use super::solver::Solver;
 use super::stiffness::{self, Block, Sym2};
 use bevy::math::DVec2;
 
@@ -50,20 +55,33 @@ impl Scratch {
     }
 }
 
-/// f(x) = m g + Σ spring forces.
-fn forces(
+/// f = m g + f_ext, the forces that do not depend on the springs: the start of every force
+/// evaluation (the schedule's gravity pass and every integrator stage). `external` is `None`
+/// when every external force is zero.
+pub fn body_forces(
     threads: &SolverThreads,
-    buffers: &mut SpringBuffers,
+    springs: usize,
     f: &mut [DVec2],
-    x: &[DVec2],
     mass: &[f64],
-    springs: &[PackedSpring],
+    external: Option<&[DVec2]>,
     g: DVec2,
 ) {
-    threads.each(springs.len(), (&mut *f, mass), |(f, m)| {
-        apply_gravity(f, m, g)
-    });
-    super::parallel::accumulate_spring_forces(threads, buffers, f, x, springs);
+    match external {
+        None => threads.each(springs, (f, mass), |(f, m)| apply_gravity(f, m, g)),
+        Some(e) => threads.each(springs, (f, mass, e), |(f, m, e)| {
+            apply_gravity_and_external(f, m, e, g)
+        }),
+    }
+}
+
+/// f(x) = m g + f_ext + Σ spring forces.
+///
+/// A stage's evaluation: at the positions in `scratch.x`, into `scratch.f`.
+fn stage_forces(s: &mut Solver, g: DVec2, threads: &SolverThreads) {
+    let external = s.external_active.then_some(&s.external[..]);
+    let (f, x) = (&mut s.scratch.f, &s.scratch.x);
+    body_forces(threads, s.springs.len(), f, &s.mass, external, g);
+    super::parallel::accumulate_spring_forces(threads, &mut s.spring_buffers, f, x, &s.springs);
 }
 
 /// Velocity Verlet, kick-drift-kick, with a second force evaluation at x0 + dt v½.
@@ -86,10 +104,8 @@ pub fn velocity_verlet(s: &mut Solver, dt: f64, gravity: DVec2, threads: &Solver
             xs[i] = x[i] + v_half * dt;
         }
     });
-    let buffers = &mut s.spring_buffers;
-    forces(
-        threads, buffers, &mut sc.f, &sc.x, &s.mass, &s.springs, gravity,
-    );
+    stage_forces(s, gravity, threads);
+    let sc = &mut s.scratch;
     let data = (&mut s.v[..], &s.drift[..], &sc.f[..], &s.inv_mass[..]);
     threads.each(springs, data, |(v, u, f, w)| {
         for i in 0..v.len() {
@@ -125,6 +141,7 @@ pub fn rk4(s: &mut Solver, dt: f64, gravity: DVec2, threads: &SolverThreads) {
     // Stages 2..4: evaluate at x0 + c dt k_x(prev), with k_v(prev) advancing the velocity.
     for (c, weight) in [(0.5, 2.0), (0.5, 2.0), (1.0, 1.0)] {
         let h = c * dt;
+        let sc = &mut s.scratch;
         let data = (
             &mut sc.x[..],
             &mut sc.stage_v[..],
@@ -139,15 +156,8 @@ pub fn rk4(s: &mut Solver, dt: f64, gravity: DVec2, threads: &SolverThreads) {
                 stage_v[i] = v[i] + ka * h;
             }
         });
-        forces(
-            threads,
-            &mut s.spring_buffers,
-            &mut sc.f,
-            &sc.x,
-            &s.mass,
-            &s.springs,
-            gravity,
-        );
+        stage_forces(s, gravity, threads);
+        let sc = &mut s.scratch;
         let data = (
             &mut sc.f[..],
             &mut sc.sum_u[..],
@@ -163,6 +173,7 @@ pub fn rk4(s: &mut Solver, dt: f64, gravity: DVec2, threads: &SolverThreads) {
             }
         });
     }
+    let sc = &s.scratch;
     let data = (&mut s.drift[..], &mut s.v[..], &sc.sum_u[..], &sc.sum_a[..]);
     threads.each(springs, data, |(u, v, sum_u, sum_a)| {
         for i in 0..u.len() {

@@ -16,6 +16,13 @@ pub fn apply_gravity(f: &mut [DVec2], mass: &[f64], gravity: DVec2) {
     }
 }
 
+/// f = m g + f_ext: starts the force accumulation when some external force is set.
+pub fn apply_gravity_and_external(f: &mut [DVec2], mass: &[f64], external: &[DVec2], g: DVec2) {
+    for ((f, &m), &e) in f.iter_mut().zip(mass).zip(external) {
+        *f = g * m + e;
+    }
+}
+
 /// The force on a spring's end a, -k (l - L) d / l with d = x_a - x_b and l = |d| (end b gets
 /// its negative); `None` for a spring of (near) zero length, whose direction is undefined.
 /// A non-finite length still yields a (non-finite) force, so that a blow-up is seen.

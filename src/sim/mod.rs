@@ -12,6 +12,7 @@ pub mod solver;
 pub mod stability;
 pub mod stiffness;
 pub mod sync;
+pub mod tear;
 pub mod watch;
 pub mod wide;
 

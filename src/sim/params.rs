@@ -66,6 +66,9 @@ pub struct SimParams {
     /// While set, every spring uses this stiffness instead of its own (the stiffness slider and
     /// `--stiffness`). Clearing it restores each spring's own stiffness.
     pub stiffness_override: Option<f64>,
+    /// Tearing: a spring stretched past (1 + strain) × its rest length breaks (is despawned) at
+    /// the end of the tick. `None` = springs never break, and the tear pass does not run.
+    pub tear: Option<f64>,
 }
 
 impl Default for SimParams {
@@ -78,6 +81,7 @@ impl Default for SimParams {
             dt: 1e-4,
             paused: false,
             stiffness_override: None,
+            tear: None,
         }
     }
 }
@@ -121,4 +125,14 @@ pub struct PassCounts {
     pub damping: u64,
     pub ground: u64,
     pub advance: u64,
+    /// Tear checks (one per tick, only while [`SimParams::tear`] is set).
+    pub tear: u64,
+}
+
+/// Springs broken by tearing since the scene was loaded, and those found this tick (despawned
+/// by [`crate::sim::tear::remove_torn_springs`], after whatever wants to see them first).
+#[derive(Resource, Debug, Clone, Default, PartialEq)]
+pub struct Tearing {
+    pub torn: u64,
+    pub pending: Vec<Entity>,
 }

@@ -11,6 +11,7 @@ use super::parallel::{self, SolverThreads};
 use super::params::*;
 use super::solver::Solver;
 use super::sync::{sync_from_solver, sync_into_solver};
+use super::tear;
 use bevy::app::{FixedMain, RunFixedMainLoop, RunFixedMainLoopSystems};
 use bevy::ecs::schedule::{ScheduleLabel, SingleThreadedExecutor};
 use bevy::prelude::*;
@@ -26,6 +27,8 @@ pub enum PhysicsSet {
     Step,
     /// Write results back into the components.
     Writeback,
+    /// Break overstretched springs ([`super::tear`]; only while tearing is on).
+    Tear,
 }
 
 /// One step of size dt. Its sets run in this order.
@@ -120,6 +123,7 @@ impl Plugin for SimPlugin {
             .init_resource::<SimClock>()
             .init_resource::<SimStatus>()
             .init_resource::<PassCounts>()
+            .init_resource::<Tearing>()
             .init_resource::<Solver>()
             .init_resource::<TickPlan>()
             .init_resource::<StepBudget>()
@@ -129,7 +133,13 @@ impl Plugin for SimPlugin {
 
         app.configure_sets(
             FixedUpdate,
-            (PhysicsSet::Prepare, PhysicsSet::Step, PhysicsSet::Writeback).chain(),
+            (
+                PhysicsSet::Prepare,
+                PhysicsSet::Step,
+                PhysicsSet::Writeback,
+                PhysicsSet::Tear,
+            )
+                .chain(),
         )
         .add_systems(
             FixedUpdate,
@@ -139,6 +149,12 @@ impl Plugin for SimPlugin {
                     .in_set(PhysicsSet::Step)
                     .run_if(simulation_running),
                 sync_from_solver.in_set(PhysicsSet::Writeback),
+                (
+                    tear::find_torn_springs.run_if(tear::tearing_enabled),
+                    tear::remove_torn_springs.run_if(tear::tears_pending),
+                )
+                    .chain()
+                    .in_set(PhysicsSet::Tear),
                 enforce_step_budget.after(PhysicsSet::Writeback),
                 super::watch::watch_energy
                     .after(PhysicsSet::Writeback)
@@ -224,10 +240,15 @@ fn apply_gravity(
     mut n: ResMut<PassCounts>,
 ) {
     let s = &mut *solver;
-    let g = params.gravity;
-    threads.each(s.springs.len(), (&mut s.f[..], &s.mass[..]), |(f, m)| {
-        kernels::apply_gravity(f, m, g)
-    });
+    let external = s.external_active.then_some(&s.external[..]);
+    integrators::body_forces(
+        &threads,
+        s.springs.len(),
+        &mut s.f,
+        &s.mass,
+        external,
+        params.gravity,
+    );
     n.gravity += 1;
 }
 

@@ -29,6 +29,13 @@ pub struct Solver {
     /// 1/m, and 0 for a pinned particle: the velocity update then leaves it at rest, with no
     /// branch in the loop.
     pub inv_mass: Vec<f64>,
+    /// Each particle's [`crate::sim::ExternalForce`], added to gravity wherever forces are
+    /// evaluated; read only while `external_active`.
+    pub external: Vec<DVec2>,
+    /// Some external force is non-zero. When false, the force passes skip `external` entirely.
+    pub external_active: bool,
+    /// How many particles are [`crate::sim::Kinematic`] (held by the user).
+    pub kinematic: usize,
     /// The velocity the position update moves each particle with (explicit Euler: the velocity
     /// at the start of the step).
     pub drift: Vec<DVec2>,

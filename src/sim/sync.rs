@@ -3,7 +3,8 @@
 //! * Structural changes (a particle or spring added or removed, a particle pinned or unpinned)
 //!   rebuild the packed arrays: particles in creation order, springs by their ends' indices,
 //!   so results do not depend on archetype layout.
-//! * Value edits (a dragged position, a changed mass or spring) are patched in place.
+//! * Value edits (a dragged position, a changed mass, spring or external force, a particle
+//!   made [`Kinematic`] or released) are patched in place.
 //! * After the steps, positions, velocities and forces are written back without flagging them
 //!   as changed, so the next sync sees only what users changed.
 
@@ -45,7 +46,9 @@ type ParticleData<'a> = (
     Ref<'a, Position>,
     Ref<'a, Velocity>,
     Ref<'a, Mass>,
+    Ref<'a, ExternalForce>,
     Has<Pinned>,
+    Has<Kinematic>,
     &'a mut SolverIndex,
 );
 type Particles<'w, 's> = Query<'w, 's, ParticleData<'static>, Without<Spring>>;
@@ -65,7 +68,8 @@ pub fn sync_into_solver(
         solver.apply_stiffness_override(params.stiffness_override);
         return;
     }
-    for (_, _, pos, vel, mass, pinned, index) in &particles {
+    let (mut external_changed, mut kinematic) = (false, 0);
+    for (_, _, pos, vel, mass, external, pinned, held, index) in &particles {
         let i = index.0 as usize;
         if pos.is_changed() {
             solver.x[i] = pos.0;
@@ -73,9 +77,27 @@ pub fn sync_into_solver(
         if vel.is_changed() {
             solver.v[i] = if pinned { DVec2::ZERO } else { vel.0 };
         }
-        if mass.is_changed() {
+        // Grabbing and releasing (Kinematic) changes the inverse mass without a repack.
+        let w = inverse_mass(mass.0, pinned || held);
+        if mass.is_changed() || solver.inv_mass[i].to_bits() != w.to_bits() {
             solver.mass[i] = mass.0;
-            solver.inv_mass[i] = if pinned { 0.0 } else { 1.0 / mass.0 };
+            solver.inv_mass[i] = w;
+        }
+        if external.is_changed() {
+            solver.external[i] = external.0;
+            external_changed = true;
+        }
+        kinematic += held as usize;
+    }
+    // Written only when different: a paused scene's solver stays unchanged, so nothing
+    // downstream (drawing, picking grids) redoes its work.
+    if solver.kinematic != kinematic {
+        solver.kinematic = kinematic;
+    }
+    if external_changed {
+        let active = solver.external.iter().any(|f| *f != DVec2::ZERO);
+        if solver.external_active != active {
+            solver.external_active = active;
         }
     }
     let mut springs_changed = false;
@@ -90,7 +112,7 @@ pub fn sync_into_solver(
             endpoints_changed = true;
             continue;
         }
-        let endpoint = |e: Entity| particles.get(e).ok().map(|p| p.6.0);
+        let endpoint = |e: Entity| particles.get(e).ok().map(|p| p.8.0);
         let si = index.0 as usize;
         let packed = &mut solver.springs[si];
         if endpoint(spring.a) != Some(packed.a) || endpoint(spring.b) != Some(packed.b) {
@@ -126,13 +148,17 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &mut Springs
         vec![1.0; n],
         vec![1.0; n],
     );
-    for (e, _, pos, vel, m, pinned, mut solver_index) in particles.iter_mut() {
+    let mut external = vec![DVec2::ZERO; n];
+    let mut kinematic = 0;
+    for (e, _, pos, vel, m, ext, pinned, held, mut solver_index) in particles.iter_mut() {
         let i = index[&e] as usize;
         solver_index.0 = i as u32;
         x[i] = pos.0;
         v[i] = if pinned { DVec2::ZERO } else { vel.0 };
         mass[i] = m.0;
-        inv_mass[i] = if pinned { 0.0 } else { 1.0 / m.0 };
+        inv_mass[i] = inverse_mass(m.0, pinned || held);
+        external[i] = ext.0;
+        kinematic += held as usize;
     }
 
     let mut packed: Vec<(u64, Entity, PackedSpring)> = springs
@@ -161,6 +187,9 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &mut Springs
     *solver = Solver {
         entities,
         f: vec![DVec2::ZERO; n],
+        external_active: external.iter().any(|f| *f != DVec2::ZERO),
+        external,
+        kinematic,
         drift: v.clone(),
         x,
         v,
@@ -174,6 +203,11 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &mut Springs
         scratch: Default::default(),
         spring_buffers: Default::default(),
     };
+}
+
+/// 1/m, or 0 for a particle that forces do not move (pinned, or held by the user).
+fn inverse_mass(m: f64, held: bool) -> f64 {
+    if held { 0.0 } else { 1.0 / m }
 }
 
 /// Writes the solver's results back into the components, without flagging them as changed.

@@ -1,9 +1,13 @@
 //! Scripted runs of the app (used by the GUI test and to make the README's screenshot):
 //! a screenshot after a delay, a status file, quitting after a delay.
 
+use super::controls::HelpOverlay;
+use super::history::History;
+use super::pointer::Attraction;
 use super::stats::LiveStats;
 use super::view::CanvasView;
-use crate::sim::{SimClock, SimParams, Solver};
+use crate::sim::{SimClock, SimParams, Solver, Tearing};
+use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
 use bevy::render::view::screenshot::{Screenshot, save_to_disk};
 use std::path::PathBuf;
@@ -28,6 +32,18 @@ pub struct DriveState {
     last_report: Option<Instant>,
 }
 
+/// What the status report reads besides the simulation.
+#[derive(SystemParam)]
+pub struct AppState<'w> {
+    history: Res<'w, History>,
+    help: Res<'w, HelpOverlay>,
+    tearing: Res<'w, Tearing>,
+    attraction: Res<'w, Attraction>,
+}
+
+/// Scenes up to this many particles list their positions in the status report.
+const REPORT_POSITIONS: usize = 2000;
+
 #[allow(clippy::too_many_arguments)]
 pub fn drive(
     mut commands: Commands,
@@ -39,6 +55,7 @@ pub fn drive(
     clock: Res<SimClock>,
     params: Res<SimParams>,
     stats: Res<LiveStats>,
+    app: AppState,
 ) {
     let started = *state.started.get_or_insert_with(Instant::now);
     let elapsed = started.elapsed().as_secs_f64();
@@ -66,9 +83,23 @@ pub fn drive(
             "fps": stats.fps,
             "real_time_factor": stats.real_time_factor,
             "elapsed": elapsed,
-            "pinned": solver.inv_mass.iter().filter(|w| **w == 0.0).count(),
-            // The window-to-world mapping, so scripts can click at world coordinates.
+            "pinned": solver.inv_mass.iter().filter(|w| **w == 0.0).count() - solver.kinematic,
+            "held": solver.kinematic,
+            "springs_torn": app.tearing.torn,
+            "tear": params.tear,
+            "attracting": app.attraction.active_at.is_some(),
+            "external_force": solver.external_active,
+            "undo": app.history.undo.len(),
+            "redo": app.history.redo.len(),
+            "help": app.help.0,
+            "stiffness_override": params.stiffness_override,
+            // In scene order (creation order), for scenes up to REPORT_POSITIONS particles.
+            "positions": (solver.particle_count() <= REPORT_POSITIONS)
+                .then(|| solver.x.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>()),
+            // The window-to-world mapping, so scripts can click at world coordinates:
+            // window = center + (world - world_center) * scale, with y flipped.
             "view": { "scale": view.scale, "center": [view.center.x, view.center.y],
+                      "world_center": [view.world_center.x, view.world_center.y],
                       "panel_width": view.panel_width },
         });
         // A status file that cannot be written only loses the status, never the app.

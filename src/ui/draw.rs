@@ -5,8 +5,9 @@
 //! ~400 ms a frame at 64×64; see the README's performance section.)
 //! Positions are f64 in the simulation; f32 only here.
 
+use super::pointer::{Attraction, Gesture};
 use super::view::CanvasView;
-use crate::sim::{SimParams, Solver};
+use crate::sim::{SimParams, Solver, SolverIndex};
 use bevy::asset::RenderAssetUsages;
 use bevy::camera::visibility::NoFrustumCulling;
 use bevy::mesh::{Indices, PrimitiveTopology, VertexAttributeValues};
@@ -17,6 +18,8 @@ const FRAME: Color = Color::srgb(0.30, 0.32, 0.38);
 const GROUND: Color = Color::srgb(0.55, 0.45, 0.30);
 const PARTICLE: Color = Color::srgb(0.95, 0.95, 0.95);
 const PINNED: Color = Color::srgb(1.0, 0.75, 0.2);
+const HELD: Color = Color::srgb(0.35, 0.85, 1.0);
+const ATTRACTION: Color = Color::srgba(0.35, 0.85, 1.0, 0.8);
 /// Particle dot radius, in logical pixels.
 const DOT_PX: f32 = 3.5;
 /// Half the width of a spring line, in logical pixels.
@@ -55,14 +58,16 @@ pub fn spawn_batches(
     commands.insert_resource(Batches { springs, dots });
 }
 
+/// A mesh of one invisible, zero-area triangle. The renderer must never get a mesh without
+/// vertices: Bevy's mesh allocator logs an error for it on every frame
+/// (`slab_allocator: Use-after-free`), so an empty batch holds this placeholder instead.
 fn empty_mesh() -> Mesh {
-    Mesh::new(
+    let mut mesh = Mesh::new(
         PrimitiveTopology::TriangleList,
         RenderAssetUsages::default(),
-    )
-    .with_inserted_attribute(Mesh::ATTRIBUTE_POSITION, Vec::<[f32; 3]>::new())
-    .with_inserted_attribute(Mesh::ATTRIBUTE_COLOR, Vec::<[f32; 4]>::new())
-    .with_inserted_indices(Indices::U32(Vec::new()))
+    );
+    fill(&mut mesh, 0, 3, &[0, 1, 2], |_, _| {});
+    mesh
 }
 
 /// Rebuilds both meshes from the solver when it or the view changed.
@@ -72,10 +77,17 @@ pub fn update_batches(
     view: Res<CanvasView>,
     mut meshes: ResMut<Assets<Mesh>>,
     palette: Local<StrainPalette>,
+    gesture: Res<Gesture>,
+    indices: Query<&SolverIndex>,
 ) {
-    if !(solver.is_changed() || view.is_changed()) {
+    if !(solver.is_changed() || view.is_changed() || gesture.is_changed()) {
         return;
     }
+    // The grabbed particle is drawn in its own colour.
+    let held_index = match *gesture {
+        Gesture::Grab { particle, .. } => indices.get(particle).ok().map(|i| i.0 as usize),
+        _ => None,
+    };
     if let Some(mut mesh) = meshes.get_mut(&batches.springs) {
         let half = SPRING_HALF_PX / view.scale;
         fill(
@@ -112,12 +124,18 @@ pub fn update_batches(
             .collect();
         // A fan from the first corner: no centre vertex.
         let fan: Vec<u32> = (1..DOT_SIDES - 1).flat_map(|i| [0, i, i + 1]).collect();
-        let (free, pinned) = (linear(PARTICLE), linear(PINNED));
+        let (free, pinned, held) = (linear(PARTICLE), linear(PINNED), linear(HELD));
         fill(&mut mesh, solver.x.len(), DOT_SIDES, &fan, |pos, col| {
             for (i, x) in solver.x.iter().enumerate() {
                 let c = x.as_vec2();
                 pos.extend(rim.iter().map(|r| [c.x + r.x, c.y + r.y, 0.0]));
-                let color = if solver.is_pinned(i) { pinned } else { free };
+                let color = if Some(i) == held_index {
+                    held
+                } else if solver.is_pinned(i) {
+                    pinned
+                } else {
+                    free
+                };
                 col.extend(std::iter::repeat_n(color, DOT_SIDES as usize));
             }
         });
@@ -138,10 +156,21 @@ fn fill(
     pos.clear();
     col.clear();
     write(&mut pos, &mut col);
+    // No shapes: the placeholder triangle (see `empty_mesh`).
+    let placeholder = items == 0;
+    if placeholder {
+        pos.extend([[0.0; 3]; 3]);
+        col.extend([[0.0; 4]; 3]);
+    }
     mesh.insert_attribute(Mesh::ATTRIBUTE_POSITION, pos);
     mesh.insert_attribute(Mesh::ATTRIBUTE_COLOR, col);
-    if mesh.indices().map_or(0, Indices::len) != items * pattern.len() {
-        let indices = (0..items as u32)
+    let (shapes, corners, pattern) = if placeholder {
+        (1, 3, &[0, 1, 2][..])
+    } else {
+        (items, corners, pattern)
+    };
+    if mesh.indices().map_or(0, Indices::len) != shapes * pattern.len() {
+        let indices = (0..shapes as u32)
             .flat_map(|i| pattern.iter().map(move |&k| i * corners + k))
             .collect();
         mesh.insert_indices(Indices::U32(indices));
@@ -221,16 +250,32 @@ fn strain_color(t: f32) -> Color {
     }
 }
 
-/// The unit square and the ground line.
-pub fn draw_frame(mut gizmos: Gizmos, params: Res<SimParams>, view: Res<CanvasView>) {
+/// The unit square, the ground line across the window, and the attraction's circle.
+pub fn draw_frame(
+    mut gizmos: Gizmos,
+    params: Res<SimParams>,
+    view: Res<CanvasView>,
+    attraction: Res<Attraction>,
+) {
     gizmos.rect_2d(
         Isometry2d::from_translation(Vec2::splat(0.5)),
         Vec2::ONE,
         FRAME,
     );
     if let Some(g) = params.ground {
-        let reach = 2.0 * view.center.x / view.scale;
+        let (min, max) = view.visible();
         let y = g as f32;
-        gizmos.line_2d(Vec2::new(-reach, y), Vec2::new(1.0 + reach, y), GROUND);
+        gizmos.line_2d(
+            Vec2::new(min.x as f32, y),
+            Vec2::new(max.x as f32, y),
+            GROUND,
+        );
+    }
+    if let Some(at) = attraction.active_at {
+        gizmos.circle_2d(
+            Isometry2d::from_translation(at.as_vec2()),
+            attraction.radius as f32,
+            ATTRACTION,
+        );
     }
 }

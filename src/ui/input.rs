@@ -1,136 +1,140 @@
-//! Mouse and keyboard: a click adds a particle, G pauses, R resets, S saves, N steps once.
+//! The keyboard: every key binding of the app (the table is [`super::controls::CONTROLS`]).
 
-use super::view::CanvasView;
+use super::controls::HelpOverlay;
+use super::edit;
+use super::history;
+use super::pick::Picking;
+use super::pointer::{Cursor, modifiers};
+use super::view::{CanvasView, scene_box};
 use crate::scene::{CurrentScene, load_into_world, snapshot, to_ron};
-use crate::sim::grid::SpatialGrid;
 use crate::sim::*;
 use bevy::prelude::*;
-use bevy::window::PrimaryWindow;
 use bevy_egui::input::EguiWantsInput;
 
-/// The particles' positions in a grid, valid while no step ran and no particle came or went.
-pub struct ClickGrid {
-    steps: u64,
-    count: usize,
-    radius: f64,
-    cells: SpatialGrid<Entity>,
-}
+/// Particles and springs: what C clears.
+type ParticleOrSpring = Or<(With<Particle>, With<Spring>)>;
 
-/// Left click on the canvas: a particle at the cursor, joined to every particle within the
-/// click radius (rest = current distance).
-#[allow(clippy::too_many_arguments)]
-pub fn add_particle_on_click(
-    mut commands: Commands,
-    buttons: Res<ButtonInput<MouseButton>>,
-    window: Single<&Window, With<PrimaryWindow>>,
-    egui: Res<EguiWantsInput>,
-    view: Res<CanvasView>,
-    scene: Option<Res<CurrentScene>>,
-    params: Res<SimParams>,
-    mut serials: ResMut<Serials>,
-    particles: Query<(Entity, &Position), With<Particle>>,
-    clock: Res<SimClock>,
-    mut grid: Local<Option<ClickGrid>>,
-) {
-    if !buttons.just_pressed(MouseButton::Left) || egui.wants_any_pointer_input() {
-        return;
-    }
-    let Some(cursor) = window.cursor_position() else {
-        return;
-    };
-    if !view.on_canvas(cursor) {
-        return;
-    }
-    let rules = scene.and_then(|s| s.0.scene.click).unwrap_or_default();
-    let at = view.window_to_world(cursor);
-    // The grid is rebuilt only when particles moved or changed in number since the last click:
-    // building a paused scene click by click costs O(1) per neighbour.
-    let count = particles.iter().len();
-    let stale = grid
-        .as_ref()
-        .is_none_or(|g| (g.steps, g.count, g.radius) != (clock.steps, count, rules.radius));
-    if stale {
-        let mut cells = SpatialGrid::new(rules.radius);
-        for (e, p) in &particles {
-            cells.insert(p.0, e);
-        }
-        *grid = Some(ClickGrid {
-            steps: clock.steps,
-            count,
-            radius: rules.radius,
-            cells,
-        });
-    }
-    let Some(g) = grid.as_mut() else {
-        return;
-    };
-    let neighbours = g.cells.within(at, rules.radius);
-    let first = particles.is_empty();
-    let mut particle = commands.spawn((
-        Particle {
-            serial: serials.next_serial(),
-        },
-        Position(at),
-        Mass(rules.mass),
-    ));
-    if first && rules.pin_first {
-        particle.insert(Pinned);
-    }
-    let new = particle.id();
-    g.cells.insert(at, new);
-    g.count += 1;
-    let stiffness = params.stiffness_override.unwrap_or(rules.stiffness);
-    for (other, rest) in neighbours {
-        commands.spawn(Spring {
-            a: new,
-            b: other,
-            rest,
-            stiffness,
-            serial: serials.next_serial(),
-        });
-    }
-}
-
-/// A message for the panel after a keyboard or button action.
+/// A message for the panel after a keyboard or button action: (text, is an error).
 #[derive(Resource, Debug, Clone, Default)]
 pub struct Notice(pub Option<(String, bool)>);
 
-/// G / Space: pause or resume. R: reset the scene. S: save the scene. N: one step while paused.
+/// G / Space: pause or resume. N: one step while paused. R: reset. S: save. C: clear. F: fit.
+/// H / ?: help. Ctrl+Z, Ctrl+Shift+Z, Ctrl+Y: undo, redo.
+#[allow(clippy::too_many_arguments)]
 pub fn keyboard(
     mut commands: Commands,
     keys: Res<ButtonInput<KeyCode>>,
     egui: Res<EguiWantsInput>,
     mut params: ResMut<SimParams>,
+    mut view: ResMut<CanvasView>,
+    mut help: ResMut<HelpOverlay>,
+    solver: Res<Solver>,
+    everything: Query<Entity, ParticleOrSpring>,
 ) {
     if egui.wants_any_keyboard_input() {
         return;
     }
-    if keys.just_pressed(KeyCode::KeyG) || keys.just_pressed(KeyCode::Space) {
+    let (shift, ctrl) = modifiers(&keys);
+    let pressed = |k: KeyCode| keys.just_pressed(k);
+    if ctrl {
+        if pressed(KeyCode::KeyZ) && !shift {
+            commands.queue(undo);
+        } else if pressed(KeyCode::KeyZ) || pressed(KeyCode::KeyY) {
+            commands.queue(redo);
+        }
+        return;
+    }
+    if pressed(KeyCode::KeyG) || pressed(KeyCode::Space) {
         params.paused = !params.paused;
     }
-    if keys.just_pressed(KeyCode::KeyR) {
-        commands.queue(reset);
-    }
-    if keys.just_pressed(KeyCode::KeyS) {
-        commands.queue(save);
-    }
-    if keys.just_pressed(KeyCode::KeyN) && params.paused {
+    if pressed(KeyCode::KeyN) && params.paused {
         commands.queue(|world: &mut World| {
             world.resource_mut::<SimParams>().paused = false;
             advance(world, 1);
             world.resource_mut::<SimParams>().paused = true;
         });
     }
+    if pressed(KeyCode::KeyR) {
+        commands.queue(reset);
+    }
+    if pressed(KeyCode::KeyS) {
+        commands.queue(save);
+    }
+    if pressed(KeyCode::KeyC) && !everything.is_empty() {
+        edit::clear(&mut commands, everything.iter());
+    }
+    if pressed(KeyCode::KeyF) {
+        view.fit = Some(scene_box(&solver.x));
+    }
+    if pressed(KeyCode::KeyH) || (pressed(KeyCode::Slash) && shift) {
+        help.0 = !help.0;
+    }
 }
 
-/// Reloads the current scene as it was loaded.
+/// P: pin or free the particle under the cursor. X / Delete: delete it and its springs.
+#[allow(clippy::too_many_arguments)]
+pub fn particle_keys(
+    mut commands: Commands,
+    keys: Res<ButtonInput<KeyCode>>,
+    egui: Res<EguiWantsInput>,
+    cursor: Cursor,
+    scene: Option<Res<CurrentScene>>,
+    solver: Res<Solver>,
+    mut picking: ResMut<Picking>,
+    pinned: Query<Has<Pinned>, With<Particle>>,
+    springs: Query<(Entity, &Spring)>,
+) {
+    let pin = keys.just_pressed(KeyCode::KeyP);
+    let delete = keys.any_just_pressed([KeyCode::KeyX, KeyCode::Delete]);
+    if !(pin || delete) || egui.wants_any_keyboard_input() || modifiers(&keys).1 {
+        return;
+    }
+    let Some(at) = cursor.on_canvas() else {
+        return;
+    };
+    let cell = scene
+        .and_then(|s| s.0.scene.click)
+        .unwrap_or_default()
+        .radius;
+    let Some(particle) = picking.nearest(&solver, at, cursor.pick_radius(), cell) else {
+        return;
+    };
+    let Ok(is_pinned) = pinned.get(particle) else {
+        return;
+    };
+    if pin {
+        edit::toggle_pin(&mut commands, particle, is_pinned);
+    } else {
+        edit::delete_particle(&mut commands, particle, springs);
+    }
+}
+
+fn undo(world: &mut World) {
+    let text = match history::undo(world) {
+        Some(label) => format!("undid {label}"),
+        None => "nothing to undo".into(),
+    };
+    world.insert_resource(Notice(Some((text, false))));
+}
+
+fn redo(world: &mut World) {
+    let text = match history::redo(world) {
+        Some(label) => format!("redid {label}"),
+        None => "nothing to redo".into(),
+    };
+    world.insert_resource(Notice(Some((text, false))));
+}
+
+/// Reloads the current scene as it was loaded (an edit: undo takes it back).
 pub fn reset(world: &mut World) {
     if let Some(scene) = world.get_resource::<CurrentScene>().map(|s| s.0.clone()) {
+        history::record(world, "reset");
         load_into_world(world, &scene);
     }
 }
 
-/// Saves what is on screen as an explicit scene file under `saved/`.
+/// Saves what is on screen as an explicit scene file under `saved/`, and lists it in the
+/// scene picker.
 pub fn save(world: &mut World) {
     let name = world
         .get_resource::<CurrentScene>()
@@ -146,5 +150,8 @@ pub fn save(world: &mut World) {
         Ok(()) => (format!("saved {}", path.display()), false),
         Err(e) => (format!("could not save {}: {e}", path.display()), true),
     };
+    if let Some(mut panel) = world.get_resource_mut::<super::panel::PanelState>() {
+        panel.refresh_scenes();
+    }
     world.insert_resource(Notice(Some(notice)));
 }

@@ -1,15 +1,21 @@
 //! The desktop app: a window onto the simulation, an egui control panel, mouse and keyboard.
 
 mod automation;
+mod controls;
 mod draw;
+mod edit;
+mod history;
 mod input;
 mod panel;
+mod pick;
+mod plots;
+mod pointer;
 mod predict;
 mod stats;
 mod view;
 
 use crate::scene::{LoadedScene, load_into_world};
-use crate::sim::{SimParams, SimPlugin};
+use crate::sim::{SimParams, SimPlugin, tear};
 use bevy::prelude::*;
 use bevy::render::renderer::RenderAdapterInfo;
 use bevy::window::WindowResolution;
@@ -33,6 +39,13 @@ impl Plugin for AppPlugin {
             .init_resource::<view::CanvasView>()
             .init_resource::<stats::LiveStats>()
             .init_resource::<panel::PanelState>()
+            .init_resource::<history::History>()
+            .init_resource::<pick::Picking>()
+            .init_resource::<pointer::Gesture>()
+            .init_resource::<pointer::PressedAt>()
+            .init_resource::<pointer::Attraction>()
+            .init_resource::<controls::HelpOverlay>()
+            .init_resource::<plots::Timeline>()
             .init_resource::<crate::sim::watch::EnergyWatch>()
             .init_resource::<crate::sim::StabilityEstimate>()
             .add_systems(Startup, (view::spawn_camera, draw::spawn_batches))
@@ -42,19 +55,39 @@ impl Plugin for AppPlugin {
                     world.resource_mut::<SimParams>().paused = false;
                 }
             })
-            .add_systems(EguiPrimaryContextPass, panel::side_panel)
+            .add_systems(
+                EguiPrimaryContextPass,
+                (panel::side_panel, controls::help_overlay).chain(),
+            )
+            // The state before a tear, for undo: after the springs are found, before they go.
+            .add_systems(
+                FixedUpdate,
+                (|w: &mut World| history::record_burst(w, "tear", None))
+                    .after(tear::find_torn_springs)
+                    .before(tear::remove_torn_springs)
+                    .run_if(tear::tears_pending),
+            )
             .add_systems(
                 Update,
                 (
-                    view::fit_camera,
+                    (
+                        pointer::track_presses,
+                        view::zoom_and_pan,
+                        view::fit_camera,
+                        input::keyboard,
+                        input::particle_keys,
+                        pointer::press,
+                        pointer::drag,
+                        pointer::attract,
+                    )
+                        .chain(),
                     view::match_antialiasing.run_if(resource_added::<RenderAdapterInfo>),
-                    input::keyboard,
-                    input::add_particle_on_click.after(view::fit_camera),
                     stats::measure,
                     stats::estimate_stability,
+                    plots::sample.after(stats::estimate_stability),
                     automation::drive,
-                    draw::update_batches.after(view::fit_camera),
-                    draw::draw_frame,
+                    draw::update_batches.after(pointer::drag),
+                    draw::draw_frame.after(pointer::attract),
                 ),
             );
     }

@@ -1,10 +1,15 @@
 //! The control panel: scene, run state, integrator, stiffness, damping, dt, live figures.
 
+use super::controls;
+use super::history::{self, History};
 use super::input::{Notice, reset, save};
+use super::plots::{self, Timeline};
+use super::pointer::Attraction;
 use super::stats::LiveStats;
 use super::view::CanvasView;
 use crate::scene::{CurrentScene, load_into_world, presets};
 use crate::sim::*;
+use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
 use bevy_egui::{EguiContexts, egui};
 use std::path::Path;
@@ -16,31 +21,65 @@ pub struct PanelState {
     scenes: Vec<(String, String)>,
     /// The stiffness slider's value (applied to every spring when moved).
     stiffness: f64,
+    /// The tearing slider's strain (applied while tearing is on).
+    tear: f64,
 }
 
 impl Default for PanelState {
     fn default() -> Self {
-        let mut scenes: Vec<(String, String)> = presets::scene_files(Path::new("assets/scenes"))
-            .into_iter()
-            .map(|p| {
+        let mut state = PanelState {
+            scenes: vec![],
+            stiffness: DEFAULT_STIFFNESS,
+            tear: 0.2,
+        };
+        state.refresh_scenes();
+        state
+    }
+}
+
+impl PanelState {
+    /// Lists the scene files in `assets/scenes/` and `saved/`, then the built-in scenes.
+    pub fn refresh_scenes(&mut self) {
+        let mut scenes: Vec<(String, String)> = vec![];
+        for dir in ["assets/scenes", "saved"] {
+            for p in presets::scene_files(Path::new(dir)) {
                 let label = p
                     .strip_prefix("assets/scenes")
                     .unwrap_or(&p)
                     .with_extension("")
                     .display()
                     .to_string();
-                (label, p.display().to_string())
-            })
-            .collect();
+                scenes.push((label, p.display().to_string()));
+            }
+        }
         for (name, _) in presets::BUILTIN {
             if !scenes.iter().any(|(label, _)| label == name) {
                 scenes.push((name.to_string(), name.to_string()));
             }
         }
-        PanelState {
-            scenes,
-            stiffness: DEFAULT_STIFFNESS,
-        }
+        self.scenes = scenes;
+    }
+}
+
+/// The panel's label for what changed between two parameter sets (run state aside), for the
+/// undo history; `None` when nothing did.
+fn edit_label(old: &SimParams, new: &SimParams) -> Option<&'static str> {
+    if old.integrator != new.integrator {
+        Some("integrator")
+    } else if old.stiffness_override != new.stiffness_override {
+        Some("stiffness")
+    } else if old.damping != new.damping {
+        Some("damping")
+    } else if old.dt != new.dt {
+        Some("dt")
+    } else if old.ground != new.ground {
+        Some("ground")
+    } else if old.tear != new.tear {
+        Some("tearing")
+    } else if old.gravity != new.gravity {
+        Some("gravity")
+    } else {
+        None
     }
 }
 
@@ -58,7 +97,13 @@ pub fn side_panel(
     status: Res<SimStatus>,
     stats: Res<LiveStats>,
     stability: Res<StabilityEstimate>,
+    extra: PanelExtras,
 ) -> Result {
+    let PanelExtras {
+        timeline,
+        history,
+        mut attraction,
+    } = extra;
     let ctx = contexts.ctx_mut()?;
     let mut root = egui::Ui::new(
         ctx.clone(),
@@ -77,6 +122,9 @@ pub fn side_panel(
             .or(scene.0.scene.click.map(|c| c.stiffness))
             .unwrap_or(DEFAULT_STIFFNESS)
             .clamp(10.0, 1e6);
+        if let Some(strain) = scene.0.scene.tear {
+            state.tear = strain.clamp(0.01, 2.0);
+        }
     }
     let mut p = params.clone();
     let scene_name = scene.as_ref().map(|s| s.0.name()).unwrap_or_default();
@@ -100,8 +148,10 @@ pub fn side_panel(
                         for (label, target) in &state.scenes {
                             if ui.selectable_label(*label == scene_name, label).clicked() {
                                 match presets::resolve(target) {
-                                    Ok(loaded) => commands
-                                        .queue(move |w: &mut World| load_into_world(w, &loaded)),
+                                    Ok(loaded) => commands.queue(move |w: &mut World| {
+                                        history::record(w, "load");
+                                        load_into_world(w, &loaded)
+                                    }),
                                     Err(e) => commands
                                         .insert_resource(Notice(Some((e.to_string(), true)))),
                                 }
@@ -124,6 +174,21 @@ pub fn side_panel(
                 if ui.button("Save (S)").clicked() {
                     commands.queue(save);
                 }
+            });
+            ui.horizontal(|ui| {
+                let undo = ui.add_enabled(!history.undo.is_empty(), egui::Button::new("⮪ Undo"));
+                if undo.on_hover_text("ctrl+Z").clicked() {
+                    commands.queue(|w: &mut World| {
+                        history::undo(w);
+                    });
+                }
+                let redo = ui.add_enabled(!history.redo.is_empty(), egui::Button::new("Redo ⮫"));
+                if redo.on_hover_text("ctrl+shift+Z, ctrl+Y").clicked() {
+                    commands.queue(|w: &mut World| {
+                        history::redo(w);
+                    });
+                }
+                ui.small(format!("{} to undo", history.undo.len()));
             });
             let blown = match *status {
                 SimStatus::Running => {
@@ -215,6 +280,38 @@ pub fn side_panel(
                     p.ground = ground.then_some(0.0);
                 }
                 ui.end_row();
+
+                ui.label("Tearing");
+                ui.horizontal(|ui| {
+                    let mut on = p.tear.is_some();
+                    if ui.checkbox(&mut on, "").changed() {
+                        p.tear = on.then_some(state.tear);
+                    }
+                    let slider = egui::Slider::new(&mut state.tear, 0.01..=2.0)
+                        .logarithmic(true)
+                        .custom_formatter(|v, _| format!("{:.0} %", v * 100.0));
+                    if ui.add_enabled(on, slider).on_hover_text("strain at which a spring breaks").changed() {
+                        p.tear = Some(state.tear);
+                    }
+                });
+                ui.end_row();
+
+                ui.label("Attraction");
+                ui.horizontal(|ui| {
+                    ui.add(
+                        egui::DragValue::new(&mut attraction.strength)
+                            .range(0.0..=5000.0)
+                            .suffix(" m/s²"),
+                    );
+                    ui.add(
+                        egui::DragValue::new(&mut attraction.radius)
+                            .range(0.01..=1.0)
+                            .speed(0.005)
+                            .prefix("r ")
+                            .suffix(" m"),
+                    );
+                });
+                ui.end_row();
             });
             ui.separator();
 
@@ -247,16 +344,29 @@ pub fn side_panel(
                 row("  springs", format!("{:.6} J", energy.potential_springs));
             });
             ui.separator();
-            ui.small(
-                "Click the canvas: add a particle, joined to every particle within the \
-                 scene's click radius.\nG / Space: run or pause.  N: one step.\n\
-                 R: reset.  S: save to saved/.",
-            );
+            egui::CollapsingHeader::new("Plots")
+                .default_open(true)
+                .show(ui, |ui| plots::show(ui, &timeline, &stability));
+            egui::CollapsingHeader::new("Controls (H)")
+                .default_open(false)
+                .show(ui, |ui| controls::controls_grid(ui, "panel-controls"));
             });
         });
     view.panel_width = response.response.rect.width();
+    if let Some(label) = edit_label(&params, &p) {
+        let before = params.clone();
+        commands.queue(move |w: &mut World| history::record_burst(w, label, Some(before)));
+    }
     params.set_if_neq(p);
     Ok(())
+}
+
+/// The panel's other resources (a system takes at most 16 parameters).
+#[derive(SystemParam)]
+pub struct PanelExtras<'w> {
+    timeline: Res<'w, Timeline>,
+    history: Res<'w, History>,
+    attraction: ResMut<'w, Attraction>,
 }
 
 const RED: egui::Color32 = egui::Color32::from_rgb(255, 110, 90);

@@ -1,0 +1,72 @@
+//! The list of controls, shown by the help overlay (H or ?) and in the panel.
+
+use bevy::prelude::*;
+use bevy_egui::{EguiContexts, egui};
+
+/// Every control: (input, action). The README's controls table says the same.
+pub const CONTROLS: &[(&str, &str)] = &[
+    (
+        "left press on a particle",
+        "grab it and drag; release throws it",
+    ),
+    (
+        "left click on empty canvas",
+        "add a particle, joined to those within the click radius",
+    ),
+    ("shift + left click", "add a pinned particle"),
+    ("right button held", "attract particles within the circle"),
+    ("P (cursor on a particle)", "pin or free it"),
+    ("X or Delete (on a particle)", "delete it and its springs"),
+    ("ctrl + left drag", "cut every spring the cursor crosses"),
+    ("C", "clear the canvas"),
+    ("ctrl+Z", "undo"),
+    ("ctrl+shift+Z or ctrl+Y", "redo"),
+    ("mouse wheel", "zoom about the cursor"),
+    ("middle drag", "pan"),
+    ("F", "fit the scene in view"),
+    ("G or Space", "run or pause"),
+    ("N", "one step while paused"),
+    ("R", "reset the scene"),
+    ("S", "save to saved/"),
+    ("H or ?", "show or hide this list"),
+];
+
+/// Whether the help overlay is shown.
+#[derive(Resource, Debug, Clone, Copy, Default, PartialEq)]
+pub struct HelpOverlay(pub bool);
+
+/// The controls as a two-column grid.
+pub fn controls_grid(ui: &mut egui::Ui, id: &str) {
+    egui::Grid::new(id)
+        .num_columns(2)
+        .striped(true)
+        .show(ui, |ui| {
+            for (input, action) in CONTROLS {
+                ui.monospace(*input);
+                ui.label(*action);
+                ui.end_row();
+            }
+        });
+}
+
+/// The overlay, over the canvas.
+pub fn help_overlay(mut contexts: EguiContexts, mut help: ResMut<HelpOverlay>) -> Result {
+    if !help.0 {
+        return Ok(());
+    }
+    let ctx = contexts.ctx_mut()?;
+    let mut open = true;
+    egui::Window::new("Controls")
+        .open(&mut open)
+        .collapsible(false)
+        .resizable(false)
+        .anchor(egui::Align2::CENTER_CENTER, [140.0, 0.0])
+        .show(ctx, |ui| {
+            controls_grid(ui, "help-controls");
+            ui.small("H or ? closes this.");
+        });
+    if !open {
+        help.0 = false;
+    }
+    Ok(())
+}

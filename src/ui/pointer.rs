@@ -1,0 +1,312 @@
+//! Mouse gestures on the canvas: a press on a particle grabs it, a click on empty canvas adds
+//! one (shift: pinned), ctrl + drag cuts springs, the right button attracts.
+//!
+//! The grab is kinematic: while held, the particle is placed at the cursor every frame and
+//! moves with the cursor's velocity during the ticks in between (the solver treats it as
+//! infinitely heavy, [`Kinematic`]); on release it keeps that velocity. A stiff mouse spring
+//! would lag behind the cursor and, stiff enough not to, would set the stable step of the whole
+//! scene; a kinematic particle follows exactly and costs the integrators nothing. While paused
+//! the grab moves the particle and leaves it at rest.
+
+use super::edit;
+use super::pick::Picking;
+use super::view::CanvasView;
+use crate::scene::CurrentScene;
+use crate::sim::*;
+use bevy::ecs::entity::EntityHashSet;
+use bevy::ecs::system::SystemParam;
+use bevy::input::ButtonState;
+use bevy::math::DVec2;
+use bevy::prelude::*;
+use bevy::window::{PrimaryWindow, WindowEvent};
+use bevy_egui::input::EguiWantsInput;
+
+/// How close, in logical pixels, a press must be to a particle to pick it.
+pub const PICK_PX: f32 = 10.0;
+/// Time constant of the grabbed particle's velocity estimate, s.
+const VELOCITY_SMOOTHING: f64 = 0.04;
+
+/// The gesture under way.
+#[derive(Resource, Debug, Default)]
+pub enum Gesture {
+    #[default]
+    None,
+    Grab {
+        particle: Entity,
+        last: DVec2,
+        velocity: DVec2,
+    },
+    Cut {
+        last: DVec2,
+        cut: EntityHashSet,
+    },
+}
+
+/// The right button's pull: particles within `radius` of the cursor feel
+/// f = m · `strength` · (cursor − x) / radius, toward the cursor.
+#[derive(Resource, Debug, Clone, Copy, PartialEq)]
+pub struct Attraction {
+    /// m.
+    pub radius: f64,
+    /// m/s² at the rim.
+    pub strength: f64,
+    /// Where it pulls, while the button is held.
+    pub active_at: Option<DVec2>,
+}
+
+impl Default for Attraction {
+    fn default() -> Self {
+        Attraction {
+            radius: 0.12,
+            strength: 200.0,
+            active_at: None,
+        }
+    }
+}
+
+/// The frame's pointer events, replayed in order. A frame can bring a press and the moves
+/// after it together (a quick press and drag, a slow frame): a press belongs where it
+/// happened, not where the cursor is at the end of the frame, and a pan moves by the cursor's
+/// path while the button was down.
+#[derive(Resource, Debug, Default)]
+pub struct PressedAt {
+    /// Where the left button went down this frame, if it did.
+    pub left: Option<Vec2>,
+    /// Where the middle button went down this frame, if it did.
+    pub middle: Option<Vec2>,
+    /// How far the cursor moved this frame while the middle button was down.
+    pub middle_drag: Vec2,
+}
+
+/// Fills [`PressedAt`] from the frame's window events.
+pub fn track_presses(
+    mut events: MessageReader<WindowEvent>,
+    mut state: Local<(Option<Vec2>, bool)>,
+    mut pressed: ResMut<PressedAt>,
+) {
+    let (cursor, middle_down) = &mut *state;
+    *pressed = PressedAt::default();
+    for event in events.read() {
+        match event {
+            WindowEvent::CursorMoved(m) => {
+                if *middle_down && let Some(prev) = *cursor {
+                    pressed.middle_drag += m.position - prev;
+                }
+                *cursor = Some(m.position);
+            }
+            WindowEvent::MouseButtonInput(b) => match (b.button, b.state) {
+                (MouseButton::Left, ButtonState::Pressed) => {
+                    pressed.left = pressed.left.or(*cursor);
+                }
+                (MouseButton::Middle, ButtonState::Pressed) => {
+                    *middle_down = true;
+                    pressed.middle = pressed.middle.or(*cursor);
+                }
+                (MouseButton::Middle, ButtonState::Released) => *middle_down = false,
+                _ => {}
+            },
+            _ => {}
+        }
+    }
+}
+
+/// The cursor in window and world coordinates, and whether it may start a gesture (on the
+/// canvas, not over a panel or window of egui's).
+#[derive(SystemParam)]
+pub struct Cursor<'w, 's> {
+    window: Single<'w, 's, &'static Window, With<PrimaryWindow>>,
+    egui: Res<'w, EguiWantsInput>,
+    view: Res<'w, CanvasView>,
+    pressed: Res<'w, PressedAt>,
+}
+
+impl Cursor<'_, '_> {
+    /// The world point where the left button went down this frame, when that was on the
+    /// canvas and free.
+    pub fn left_press(&self) -> Option<DVec2> {
+        let p = self.pressed.left.or(self.window.cursor_position())?;
+        (self.view.on_canvas(p) && !self.egui.wants_any_pointer_input())
+            .then(|| self.view.window_to_world(p))
+    }
+
+    pub fn world(&self) -> Option<DVec2> {
+        let p = self.window.cursor_position()?;
+        Some(self.view.window_to_world(p))
+    }
+
+    /// The world point under the cursor, when the cursor is on the canvas and free.
+    pub fn on_canvas(&self) -> Option<DVec2> {
+        let p = self.window.cursor_position()?;
+        (self.view.on_canvas(p) && !self.egui.wants_any_pointer_input())
+            .then(|| self.view.window_to_world(p))
+    }
+
+    /// The pick radius in metres.
+    pub fn pick_radius(&self) -> f64 {
+        PICK_PX as f64 * self.view.pixel()
+    }
+}
+
+/// Shift and ctrl: down at any time during this frame (held, pressed or released in it). A
+/// quick ctrl+Z can press and release ctrl within one frame, or release it in the frame that
+/// brings the Z.
+pub fn modifiers(keys: &ButtonInput<KeyCode>) -> (bool, bool) {
+    let held = |pair: [KeyCode; 2]| {
+        keys.any_pressed(pair) || keys.any_just_pressed(pair) || keys.any_just_released(pair)
+    };
+    let shift = held([KeyCode::ShiftLeft, KeyCode::ShiftRight]);
+    let ctrl = held([KeyCode::ControlLeft, KeyCode::ControlRight]);
+    (shift, ctrl)
+}
+
+/// Left press: cut (ctrl), grab (on a particle) or add (elsewhere; shift pins it).
+#[allow(clippy::too_many_arguments)]
+pub fn press(
+    mut commands: Commands,
+    buttons: Res<ButtonInput<MouseButton>>,
+    keys: Res<ButtonInput<KeyCode>>,
+    cursor: Cursor,
+    scene: Option<Res<CurrentScene>>,
+    params: Res<SimParams>,
+    solver: Res<Solver>,
+    mut serials: ResMut<Serials>,
+    mut picking: ResMut<Picking>,
+    mut gesture: ResMut<Gesture>,
+) {
+    if !buttons.just_pressed(MouseButton::Left) {
+        return;
+    }
+    let Some(at) = cursor.left_press() else {
+        return;
+    };
+    let (shift, ctrl) = modifiers(&keys);
+    if ctrl {
+        *gesture = Gesture::Cut {
+            last: at,
+            cut: EntityHashSet::default(),
+        };
+        return;
+    }
+    let rules = scene.and_then(|s| s.0.scene.click).unwrap_or_default();
+    let cell = rules.radius;
+    if let Some(particle) = picking.nearest(&solver, at, cursor.pick_radius(), cell) {
+        commands.queue(super::history::before("grab"));
+        commands.entity(particle).insert(Kinematic);
+        *gesture = Gesture::Grab {
+            particle,
+            last: at,
+            velocity: DVec2::ZERO,
+        };
+        return;
+    }
+    let neighbours = picking.within(&solver, at, rules.radius, cell);
+    let pinned =
+        shift || (rules.pin_first && solver.particle_count() == 0 && neighbours.is_empty());
+    let stiffness = params.stiffness_override.unwrap_or(rules.stiffness);
+    let new = edit::add_particle(
+        &mut commands,
+        &mut serials,
+        at,
+        pinned,
+        &rules,
+        stiffness,
+        &neighbours,
+    );
+    picking.note_added(&solver, at, new, cell);
+}
+
+/// While the left button is held: the grabbed particle follows the cursor, or the cut goes on
+/// along its path. Release ends the gesture.
+#[allow(clippy::too_many_arguments)]
+pub fn drag(
+    mut commands: Commands,
+    buttons: Res<ButtonInput<MouseButton>>,
+    cursor: Cursor,
+    time: Res<Time<Real>>,
+    params: Res<SimParams>,
+    solver: Res<Solver>,
+    mut picking: ResMut<Picking>,
+    mut gesture: ResMut<Gesture>,
+    mut particles: Query<(&mut Position, &mut Velocity), With<Particle>>,
+) {
+    let held = buttons.pressed(MouseButton::Left);
+    let at = cursor.world();
+    match &mut *gesture {
+        Gesture::None => {}
+        Gesture::Grab {
+            particle,
+            last,
+            velocity,
+        } => {
+            let Ok((mut pos, mut vel)) = particles.get_mut(*particle) else {
+                // Deleted, cleared or undone under the cursor.
+                *gesture = Gesture::None;
+                return;
+            };
+            if let Some(at) = at {
+                let dt = time.delta_secs_f64();
+                if dt > 0.0 {
+                    let alpha = 1.0 - (-dt / VELOCITY_SMOOTHING).exp();
+                    *velocity += ((at - *last) / dt - *velocity) * alpha;
+                }
+                *last = at;
+                pos.set_if_neq(Position(at));
+            }
+            let v = if params.paused {
+                DVec2::ZERO
+            } else {
+                *velocity
+            };
+            vel.set_if_neq(Velocity(v));
+            if !held {
+                commands.entity(*particle).remove::<Kinematic>();
+                *gesture = Gesture::None;
+            }
+        }
+        Gesture::Cut { last, cut } => {
+            if let Some(at) = at
+                && at != *last
+            {
+                let crossed: Vec<Entity> = picking
+                    .springs_crossing(&solver, *last, at)
+                    .into_iter()
+                    .map(|i| solver.spring_entities[i as usize])
+                    .filter(|e| !cut.contains(e))
+                    .collect();
+                if !crossed.is_empty() {
+                    edit::cut(&mut commands, &crossed, cut.is_empty());
+                    cut.extend(crossed);
+                }
+                *last = at;
+            }
+            if !held {
+                *gesture = Gesture::None;
+            }
+        }
+    }
+}
+
+/// Right button held: pull the particles near the cursor toward it, through their
+/// [`ExternalForce`], which every integrator adds at every force evaluation.
+pub fn attract(
+    buttons: Res<ButtonInput<MouseButton>>,
+    cursor: Cursor,
+    mut attraction: ResMut<Attraction>,
+    mut particles: Query<(&Position, &Mass, &mut ExternalForce), With<Particle>>,
+) {
+    let started = buttons.just_pressed(MouseButton::Right) && cursor.on_canvas().is_some();
+    let held = buttons.pressed(MouseButton::Right) && (started || attraction.active_at.is_some());
+    let at = held.then(|| cursor.world()).flatten();
+    if at.is_none() && attraction.active_at.is_none() {
+        return;
+    }
+    attraction.active_at = at;
+    let (radius, strength) = (attraction.radius, attraction.strength);
+    for (pos, mass, mut external) in &mut particles {
+        let f = match at {
+            Some(c) if pos.0.distance(c) < radius => (c - pos.0) * (mass.0 * strength / radius),
+            _ => DVec2::ZERO,
+        };
+        external.set_if_neq(ExternalForce(f));
+    }
+}
