@@ -221,6 +221,7 @@ fn the_way_back_from_a_blow_up_leads_to_a_usable_state() {
     hooke::sim::pack(app.world_mut()).unwrap();
     let restored = solver(&app).energy(g).total();
     let near = EnergyWatch::near(at_edit);
+    println!("edit {at_edit:.4e} J, stopped at {energy:.4e} J, restored {restored:.4e} J");
     assert!(
         restored <= near + 1e-6 * at_edit.abs(),
         "restored {restored:.4e} J, the edit had {at_edit:.4e} J (stopped at {energy:.3e} J)"
