@@ -222,6 +222,14 @@ mod tests {
         }
         record_burst(world, "damping", None);
         assert_eq!(world.resource::<History>().undo.len(), 2);
+        // A parameter edit records the parameters from before it; undo puts them back.
+        let before = world.resource::<SimParams>().clone();
+        world.resource_mut::<SimParams>().stiffness_override = Some(4e5);
+        record_burst(world, "stiffness", Some(before.clone()));
+        assert_eq!(undo(world), Some("stiffness"));
+        assert_eq!(*world.resource::<SimParams>(), before);
+        assert_eq!(redo(world), Some("stiffness"));
+        assert_eq!(world.resource::<SimParams>().stiffness_override, Some(4e5));
         record(world, "add");
         record(world, "add");
         assert_eq!(
