@@ -44,7 +44,7 @@ enum Command {
     /// Run a scene headless (no window, no GPU) and report.
     #[command(allow_negative_numbers = true)]
     Run(RunArgs),
-    /// Measured reports: work-precision.
+    /// Measured reports: work-precision, stability limits, performance.
     #[command(subcommand)]
     Bench(BenchCommand),
 }

@@ -175,7 +175,7 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
     let clock = *world.resource::<SimClock>();
     let blowup_step = match status {
         SimStatus::BlewUp { step, .. } | SimStatus::EnergyGrew { step, .. } => Some(step),
-        SimStatus::Running => None,
+        SimStatus::Running | SimStatus::InvalidInput(_) => None,
     };
     let springs = solver.spring_count();
     let report = RunReport {

@@ -2,6 +2,7 @@
 
 pub mod components;
 pub mod grid;
+pub mod inputs;
 pub mod integrators;
 pub mod kernels;
 pub mod parallel;

@@ -106,6 +106,9 @@ pub enum SimStatus {
     /// A step produced a non-finite position or velocity. The simulation paused itself;
     /// `step` is the 1-based number of the step that did it.
     BlewUp { step: u64, time: f64 },
+    /// A value a user wrote is unusable (see [`crate::sim::inputs`]); paused, and the solver
+    /// keeps its last good state until it is mended.
+    InvalidInput(crate::sim::inputs::InputProblem),
     /// The total energy rose past the watch's bound (see [`crate::sim::watch`]); paused.
     EnergyGrew {
         step: u64,

@@ -5,6 +5,7 @@
 //! runs the [`PhysicsStep`] schedule [`TickPlan::steps_per_tick`] times in a tight loop with a
 //! single-threaded executor; the ECS sync happens once per tick, not per step.
 
+use super::inputs;
 use super::integrators::{self, CgSettings};
 use super::kernels;
 use super::parallel::{self, SolverThreads};
@@ -144,11 +145,18 @@ impl Plugin for SimPlugin {
         .add_systems(
             FixedUpdate,
             (
-                sync_into_solver.in_set(PhysicsSet::Prepare),
+                (
+                    inputs::check_inputs,
+                    sync_into_solver.run_if(inputs::inputs_valid),
+                )
+                    .chain()
+                    .in_set(PhysicsSet::Prepare),
                 run_steps
                     .in_set(PhysicsSet::Step)
                     .run_if(simulation_running),
-                sync_from_solver.in_set(PhysicsSet::Writeback),
+                sync_from_solver
+                    .in_set(PhysicsSet::Writeback)
+                    .run_if(inputs::inputs_valid),
                 (
                     tear::find_torn_springs.run_if(tear::tearing_enabled),
                     tear::remove_torn_springs.run_if(tear::tears_pending),
@@ -409,14 +417,21 @@ fn plan_tick(
     let now = Instant::now();
     budget.adapt(now);
     budget.frame_start = Some(now);
+    // A bad dt (written by user code) is reported by the input check; the tick keeps its
+    // size until it is mended.
+    if inputs::check_params(&params).is_some() {
+        return;
+    }
     let steps = (plan.target_tick_seconds / params.dt)
         .round()
         .clamp(1.0, 1e6) as u32;
     if plan.steps_per_tick != steps {
         plan.steps_per_tick = steps;
     }
-    let tick = Duration::from_secs_f64(params.dt * steps as f64);
-    if time.timestep() != tick {
+    let Ok(tick) = Duration::try_from_secs_f64(params.dt * steps as f64) else {
+        return;
+    };
+    if time.timestep() != tick && tick > Duration::ZERO {
         time.set_timestep(tick);
     }
 }

@@ -234,7 +234,7 @@ mod tests {
         record(world, "add");
         assert_eq!(
             world.resource::<History>().undo.len(),
-            4,
+            5,
             "clicks are one entry each"
         );
         undo(world);

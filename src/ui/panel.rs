@@ -201,6 +201,7 @@ pub fn side_panel(
                     "Blew up at step {step} (t = {time:.4} s): a position or velocity became \
                      infinite or NaN."
                 )),
+                SimStatus::InvalidInput(problem) => Some(format!("Paused on a bad input: {problem}.")),
                 SimStatus::EnergyGrew {
                     step,
                     time,

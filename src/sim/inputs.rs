@@ -1,0 +1,165 @@
+//! Checks, at the start of every fixed tick, what users can write: the [`SimParams`] resource
+//! and the particles' [`Mass`] and springs' [`Spring`] components (those added or changed
+//! since the last tick). A bad value pauses the simulation with
+//! [`SimStatus::InvalidInput`], which names the field and the value; until it is mended the
+//! solver is neither fed nor stepped nor written back, so the last good state stays and no NaN
+//! is drawn. Mended, the status goes back to running (still paused).
+
+use super::components::{Mass, Particle, Spring};
+use super::params::{SimParams, SimStatus};
+use bevy::prelude::*;
+use std::fmt;
+
+/// What is wrong with an input.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InputProblem {
+    /// The field, as a user writes it (`SimParams.dt`, `Mass`, `Spring.b`, ...).
+    pub field: &'static str,
+    /// Its value (for a spring end: NaN).
+    pub value: f64,
+    /// The entity it belongs to, for a component.
+    pub entity: Option<Entity>,
+    /// What it must be.
+    pub rule: &'static str,
+}
+
+impl fmt::Display for InputProblem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.field)?;
+        if let Some(e) = self.entity {
+            write!(f, " of {e}")?;
+        }
+        if !self.value.is_nan() || self.rule.contains("finite") {
+            write!(f, " = {}", self.value)?;
+        }
+        write!(f, ": {}", self.rule)
+    }
+}
+
+fn problem(field: &'static str, value: f64, rule: &'static str) -> InputProblem {
+    InputProblem {
+        field,
+        value,
+        entity: None,
+        rule,
+    }
+}
+
+/// The first problem with the parameters, if any.
+pub fn check_params(p: &SimParams) -> Option<InputProblem> {
+    const POSITIVE: &str = "must be finite and > 0";
+    const NON_NEGATIVE: &str = "must be finite and >= 0";
+    const FINITE: &str = "must be finite";
+    let bad_positive = |v: f64| !(v.is_finite() && v > 0.0);
+    let bad_non_negative = |v: f64| !(v.is_finite() && v >= 0.0);
+    if bad_positive(p.dt) {
+        return Some(problem("SimParams.dt", p.dt, POSITIVE));
+    }
+    for (field, v) in [
+        ("SimParams.gravity.x", p.gravity.x),
+        ("SimParams.gravity.y", p.gravity.y),
+    ] {
+        if !v.is_finite() {
+            return Some(problem(field, v, FINITE));
+        }
+    }
+    if bad_non_negative(p.damping) {
+        return Some(problem("SimParams.damping", p.damping, NON_NEGATIVE));
+    }
+    if let Some(g) = p.ground.filter(|g| !g.is_finite()) {
+        return Some(problem("SimParams.ground", g, FINITE));
+    }
+    if let Some(k) = p.stiffness_override.filter(|k| bad_non_negative(*k)) {
+        return Some(problem("SimParams.stiffness_override", k, NON_NEGATIVE));
+    }
+    if let Some(s) = p.tear.filter(|s| bad_positive(*s)) {
+        return Some(problem("SimParams.tear", s, POSITIVE));
+    }
+    None
+}
+
+fn check_mass(e: Entity, m: &Mass) -> Option<InputProblem> {
+    (!(m.0.is_finite() && m.0 > 0.0)).then_some(InputProblem {
+        entity: Some(e),
+        ..problem("Mass", m.0, "must be finite and > 0")
+    })
+}
+
+fn check_spring(
+    e: Entity,
+    s: &Spring,
+    is_particle: impl Fn(Entity) -> bool,
+) -> Option<InputProblem> {
+    let on = |p: InputProblem| {
+        Some(InputProblem {
+            entity: Some(e),
+            ..p
+        })
+    };
+    if !(s.stiffness.is_finite() && s.stiffness >= 0.0) {
+        return on(problem(
+            "Spring.stiffness",
+            s.stiffness,
+            "must be finite and >= 0",
+        ));
+    }
+    if !(s.rest.is_finite() && s.rest >= 0.0) {
+        return on(problem("Spring.rest", s.rest, "must be finite and >= 0"));
+    }
+    if s.a == s.b {
+        return on(problem(
+            "Spring.b",
+            f64::NAN,
+            "is the same particle as Spring.a",
+        ));
+    }
+    for (field, end) in [("Spring.a", s.a), ("Spring.b", s.b)] {
+        if !is_particle(end) {
+            return on(problem(field, f64::NAN, "is not a particle"));
+        }
+    }
+    None
+}
+
+/// Run condition: the inputs passed the last check.
+pub fn inputs_valid(status: Res<SimStatus>) -> bool {
+    !matches!(*status, SimStatus::InvalidInput(_))
+}
+
+/// Checks the inputs (see the module docs). While a problem stands, every input is checked
+/// each tick, so that mending it (or removing the entity) is seen.
+pub fn check_inputs(
+    mut params: ResMut<SimParams>,
+    mut status: ResMut<SimStatus>,
+    changed_masses: Query<(Entity, Ref<Mass>)>,
+    springs: Query<(Entity, Ref<Spring>)>,
+    particles: Query<(), With<Particle>>,
+) {
+    let recheck_all = matches!(*status, SimStatus::InvalidInput(_));
+    let is_particle = |e: Entity| particles.contains(e);
+    let found = check_params(&params)
+        .or_else(|| {
+            changed_masses
+                .iter()
+                .filter(|(_, m)| recheck_all || m.is_changed())
+                .find_map(|(e, m)| check_mass(e, &m))
+        })
+        .or_else(|| {
+            springs
+                .iter()
+                .filter(|(_, s)| recheck_all || s.is_changed())
+                .find_map(|(e, s)| check_spring(e, &s, is_particle))
+        });
+    match found {
+        Some(p) => {
+            if *status != SimStatus::InvalidInput(p) {
+                *status = SimStatus::InvalidInput(p);
+            }
+            if !params.paused {
+                params.paused = true;
+            }
+        }
+        None if recheck_all => *status = SimStatus::Running,
+        None => {}
+    }
+}
