@@ -176,22 +176,30 @@ fn pixels_around(png: &Path, x: i64, y: i64, r: i64) -> Vec<(u8, u8, u8)> {
         .collect()
 }
 
-#[test]
-fn app_starts_draws_and_accepts_clicks() {
-    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+/// A display and the tools, or `None` with the reason printed (under CI: a failure).
+fn gui_display(tools: &[&str]) -> Option<(String, Option<Killed>)> {
     let in_ci = std::env::var_os("CI").is_some();
-    let Some((display, _xvfb)) = display() else {
+    let Some(found) = display() else {
         assert!(!in_ci, "CI must provide Xvfb for the GUI test");
         println!("skipped: no DISPLAY and no Xvfb on this machine");
-        return;
+        return None;
     };
-    for tool in ["xdotool", "import", "convert"] {
+    for tool in tools {
         if !have(tool) {
             assert!(!in_ci, "CI must install {tool}");
             println!("skipped: {tool} is not installed");
-            return;
+            return None;
         }
     }
+    Some(found)
+}
+
+#[test]
+fn app_starts_draws_and_accepts_clicks() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let Some((display, _xvfb)) = gui_display(&["xdotool", "import", "convert"]) else {
+        return;
+    };
     let dir = std::env::temp_dir().join(format!("hooke-gui-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let report = dir.join("status.json");
@@ -378,16 +386,10 @@ impl Session {
     fn move_to(&self, x: f64, y: f64) {
         let view = self.status()["view"].clone();
         let (wx, wy) = world_to_window(&view, x, y);
-        self.x(&[
-            "mousemove",
-            "--window",
-            &self.window,
-            &wx.to_string(),
-            &wy.to_string(),
-        ]);
-        std::thread::sleep(Duration::from_millis(150));
+        self.move_px(wx, wy);
     }
 
+    /// Moves the pointer to a window point.
     fn move_px(&self, wx: i64, wy: i64) {
         self.x(&[
             "mousemove",
@@ -470,17 +472,9 @@ fn bad_lines(log: &str) -> Vec<&str> {
 #[test]
 fn every_control_works_under_real_input_and_the_log_stays_quiet() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    let in_ci = std::env::var_os("CI").is_some();
-    let Some((display, _xvfb)) = display() else {
-        assert!(!in_ci, "CI must provide Xvfb for the GUI test");
-        println!("skipped: no DISPLAY and no Xvfb on this machine");
+    let Some((display, _xvfb)) = gui_display(&["xdotool"]) else {
         return;
     };
-    if !have("xdotool") {
-        assert!(!in_ci, "CI must install xdotool");
-        println!("skipped: xdotool is not installed");
-        return;
-    }
     let dir = std::env::temp_dir().join(format!("hooke-controls-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let s = Session::start(&display, "empty", &dir);

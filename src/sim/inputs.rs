@@ -6,35 +6,9 @@
 //! is drawn. Mended, the status goes back to running (still paused).
 
 use super::components::{Mass, Particle, Spring};
+pub use super::params::InputProblem;
 use super::params::{SimParams, SimStatus};
 use bevy::prelude::*;
-use std::fmt;
-
-/// What is wrong with an input.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct InputProblem {
-    /// The field, as a user writes it (`SimParams.dt`, `Mass`, `Spring.b`, ...).
-    pub field: &'static str,
-    /// Its value (for a spring end: NaN).
-    pub value: f64,
-    /// The entity it belongs to, for a component.
-    pub entity: Option<Entity>,
-    /// What it must be.
-    pub rule: &'static str,
-}
-
-impl fmt::Display for InputProblem {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.field)?;
-        if let Some(e) = self.entity {
-            write!(f, " of {e}")?;
-        }
-        if !self.value.is_nan() || self.rule.contains("finite") {
-            write!(f, " = {}", self.value)?;
-        }
-        write!(f, ": {}", self.rule)
-    }
-}
 
 fn problem(field: &'static str, value: f64, rule: &'static str) -> InputProblem {
     InputProblem {

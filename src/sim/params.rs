@@ -108,7 +108,7 @@ pub enum SimStatus {
     BlewUp { step: u64, time: f64 },
     /// A value a user wrote is unusable (see [`crate::sim::inputs`]); paused, and the solver
     /// keeps its last good state until it is mended.
-    InvalidInput(crate::sim::inputs::InputProblem),
+    InvalidInput(InputProblem),
     /// The total energy rose past the watch's bound (see [`crate::sim::watch`]); paused.
     EnergyGrew {
         step: u64,
@@ -138,4 +138,30 @@ pub struct PassCounts {
 pub struct Tearing {
     pub torn: u64,
     pub pending: Vec<Entity>,
+}
+
+/// What is wrong with an input.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InputProblem {
+    /// The field, as a user writes it (`SimParams.dt`, `Mass`, `Spring.b`, ...).
+    pub field: &'static str,
+    /// Its value (for a spring end: NaN).
+    pub value: f64,
+    /// The entity it belongs to, for a component.
+    pub entity: Option<Entity>,
+    /// What it must be.
+    pub rule: &'static str,
+}
+
+impl std::fmt::Display for InputProblem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.field)?;
+        if let Some(e) = self.entity {
+            write!(f, " of {e}")?;
+        }
+        if !self.value.is_nan() || self.rule.contains("finite") {
+            write!(f, " = {}", self.value)?;
+        }
+        write!(f, ": {}", self.rule)
+    }
 }

@@ -130,28 +130,32 @@ fn restore(world: &mut World, state: &State) {
 
 /// Takes back the newest edit. Returns its label, or `None` when there is nothing to undo.
 pub fn undo(world: &mut World) -> Option<&'static str> {
-    let entry = world.resource_mut::<History>().undo.pop_back()?;
-    let now = capture(world, None);
-    restore(world, &entry.state);
-    let mut history = world.resource_mut::<History>();
-    history.redo.push(Entry {
-        label: entry.label,
-        state: now,
-    });
-    history.last = None;
-    Some(entry.label)
+    travel(world, |h| h.undo.pop_back(), |h, e| h.redo.push(e))
 }
 
 /// Does again the newest undone edit. Returns its label, or `None` when there is none.
 pub fn redo(world: &mut World) -> Option<&'static str> {
-    let entry = world.resource_mut::<History>().redo.pop()?;
+    travel(world, |h| h.redo.pop(), |h, e| h.undo.push_back(e))
+}
+
+/// Restores the entry `take` gives, and hands the state it replaced, under the same label, to
+/// `put` (the other stack).
+fn travel(
+    world: &mut World,
+    take: fn(&mut History) -> Option<Entry>,
+    put: fn(&mut History, Entry),
+) -> Option<&'static str> {
+    let entry = take(&mut world.resource_mut::<History>())?;
     let now = capture(world, None);
     restore(world, &entry.state);
     let mut history = world.resource_mut::<History>();
-    history.undo.push_back(Entry {
-        label: entry.label,
-        state: now,
-    });
+    put(
+        &mut history,
+        Entry {
+            label: entry.label,
+            state: now,
+        },
+    );
     history.last = None;
     Some(entry.label)
 }

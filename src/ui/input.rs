@@ -1,22 +1,18 @@
 //! The keyboard: every key binding of the app (the table is [`super::controls::CONTROLS`]).
 
+use super::actions::{redo, reset, save, undo};
 use super::controls::HelpOverlay;
 use super::edit;
-use super::history;
 use super::pick::Picking;
 use super::pointer::{Cursor, modifiers};
 use super::view::{CanvasView, scene_box};
-use crate::scene::{CurrentScene, load_into_world, snapshot, to_ron};
+use crate::scene::CurrentScene;
 use crate::sim::*;
 use bevy::prelude::*;
 use bevy_egui::input::EguiWantsInput;
 
 /// Particles and springs: what C clears.
 type ParticleOrSpring = Or<(With<Particle>, With<Spring>)>;
-
-/// A message for the panel after a keyboard or button action: (text, is an error).
-#[derive(Resource, Debug, Clone, Default)]
-pub struct Notice(pub Option<(String, bool)>);
 
 /// G / Space: pause or resume. N: one step while paused. R: reset. S: save. C: clear. F: fit.
 /// H / ?: help. Ctrl+Z, Ctrl+Shift+Z, Ctrl+Y: undo, redo.
@@ -107,51 +103,4 @@ pub fn particle_keys(
     } else {
         edit::delete_particle(&mut commands, particle, springs);
     }
-}
-
-fn undo(world: &mut World) {
-    let text = match history::undo(world) {
-        Some(label) => format!("undid {label}"),
-        None => "nothing to undo".into(),
-    };
-    world.insert_resource(Notice(Some((text, false))));
-}
-
-fn redo(world: &mut World) {
-    let text = match history::redo(world) {
-        Some(label) => format!("redid {label}"),
-        None => "nothing to redo".into(),
-    };
-    world.insert_resource(Notice(Some((text, false))));
-}
-
-/// Reloads the current scene as it was loaded (an edit: undo takes it back).
-pub fn reset(world: &mut World) {
-    if let Some(scene) = world.get_resource::<CurrentScene>().map(|s| s.0.clone()) {
-        history::record(world, "reset");
-        load_into_world(world, &scene);
-    }
-}
-
-/// Saves what is on screen as an explicit scene file under `saved/`, and lists it in the
-/// scene picker.
-pub fn save(world: &mut World) {
-    let name = world
-        .get_resource::<CurrentScene>()
-        .map(|s| s.0.name())
-        .unwrap_or_else(|| "scene".into());
-    let scene = snapshot(world);
-    let path = super::save_path(&name);
-    let result = to_ron(&scene).map_err(|e| e.to_string()).and_then(|text| {
-        std::fs::create_dir_all(path.parent().unwrap_or(&path)).map_err(|e| e.to_string())?;
-        std::fs::write(&path, text).map_err(|e| e.to_string())
-    });
-    let notice = match result {
-        Ok(()) => (format!("saved {}", path.display()), false),
-        Err(e) => (format!("could not save {}: {e}", path.display()), true),
-    };
-    if let Some(mut panel) = world.get_resource_mut::<super::panel::PanelState>() {
-        panel.refresh_scenes();
-    }
-    world.insert_resource(Notice(Some(notice)));
 }

@@ -1,9 +1,11 @@
 //! The desktop app: a window onto the simulation, an egui control panel, mouse and keyboard.
 
+mod actions;
 mod automation;
 mod controls;
 mod draw;
 mod edit;
+mod events;
 mod history;
 mod input;
 mod panel;
@@ -39,10 +41,11 @@ impl Plugin for AppPlugin {
             .init_resource::<view::CanvasView>()
             .init_resource::<stats::LiveStats>()
             .init_resource::<panel::PanelState>()
+            .init_resource::<actions::SceneList>()
             .init_resource::<history::History>()
             .init_resource::<pick::Picking>()
             .init_resource::<pointer::Gesture>()
-            .init_resource::<pointer::PressedAt>()
+            .init_resource::<events::PressedAt>()
             .init_resource::<pointer::Attraction>()
             .init_resource::<controls::HelpOverlay>()
             .init_resource::<plots::Timeline>()
@@ -71,7 +74,7 @@ impl Plugin for AppPlugin {
                 Update,
                 (
                     (
-                        pointer::track_presses,
+                        events::track_presses,
                         view::zoom_and_pan,
                         view::fit_camera,
                         input::keyboard,

@@ -1,8 +1,8 @@
 //! The control panel: scene, run state, integrator, stiffness, damping, dt, live figures.
 
+use super::actions::{self, Notice, SceneList, reset, save};
 use super::controls;
 use super::history::{self, History};
-use super::input::{Notice, reset, save};
 use super::plots::{self, Timeline};
 use super::pointer::Attraction;
 use super::stats::LiveStats;
@@ -12,13 +12,10 @@ use crate::sim::*;
 use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
 use bevy_egui::{EguiContexts, egui};
-use std::path::Path;
 
 /// Panel state that is not simulation state.
 #[derive(Resource, Debug, Clone)]
 pub struct PanelState {
-    /// Scene picker entries: (label, what to pass to `presets::resolve`).
-    scenes: Vec<(String, String)>,
     /// The stiffness slider's value (applied to every spring when moved).
     stiffness: f64,
     /// The tearing slider's strain (applied while tearing is on). It starts at 60 %: cloth32
@@ -29,37 +26,10 @@ pub struct PanelState {
 
 impl Default for PanelState {
     fn default() -> Self {
-        let mut state = PanelState {
-            scenes: vec![],
+        PanelState {
             stiffness: DEFAULT_STIFFNESS,
             tear: 0.6,
-        };
-        state.refresh_scenes();
-        state
-    }
-}
-
-impl PanelState {
-    /// Lists the scene files in `assets/scenes/` and `saved/`, then the built-in scenes.
-    pub fn refresh_scenes(&mut self) {
-        let mut scenes: Vec<(String, String)> = vec![];
-        for dir in ["assets/scenes", "saved"] {
-            for p in presets::scene_files(Path::new(dir)) {
-                let label = p
-                    .strip_prefix("assets/scenes")
-                    .unwrap_or(&p)
-                    .with_extension("")
-                    .display()
-                    .to_string();
-                scenes.push((label, p.display().to_string()));
-            }
         }
-        for (name, _) in presets::BUILTIN {
-            if !scenes.iter().any(|(label, _)| label == name) {
-                scenes.push((name.to_string(), name.to_string()));
-            }
-        }
-        self.scenes = scenes;
     }
 }
 
@@ -105,6 +75,7 @@ pub fn side_panel(
         timeline,
         history,
         mut attraction,
+        scene_list,
     } = extra;
     let ctx = contexts.ctx_mut()?;
     let mut root = egui::Ui::new(
@@ -147,7 +118,7 @@ pub fn side_panel(
                     .selected_text(&scene_name)
                     .width(150.0)
                     .show_ui(ui, |ui| {
-                        for (label, target) in &state.scenes {
+                        for (label, target) in &scene_list.0 {
                             if ui.selectable_label(*label == scene_name, label).clicked() {
                                 match presets::resolve(target) {
                                     Ok(loaded) => commands.queue(move |w: &mut World| {
@@ -180,15 +151,11 @@ pub fn side_panel(
             ui.horizontal(|ui| {
                 let undo = ui.add_enabled(!history.undo.is_empty(), egui::Button::new("⮪ Undo"));
                 if undo.on_hover_text("ctrl+Z").clicked() {
-                    commands.queue(|w: &mut World| {
-                        history::undo(w);
-                    });
+                    commands.queue(actions::undo);
                 }
                 let redo = ui.add_enabled(!history.redo.is_empty(), egui::Button::new("Redo ⮫"));
                 if redo.on_hover_text("ctrl+shift+Z, ctrl+Y").clicked() {
-                    commands.queue(|w: &mut World| {
-                        history::redo(w);
-                    });
+                    commands.queue(actions::redo);
                 }
                 ui.small(format!("{} to undo", history.undo.len()));
             });
@@ -370,6 +337,7 @@ pub struct PanelExtras<'w> {
     timeline: Res<'w, Timeline>,
     history: Res<'w, History>,
     attraction: ResMut<'w, Attraction>,
+    scene_list: Res<'w, SceneList>,
 }
 
 const RED: egui::Color32 = egui::Color32::from_rgb(255, 110, 90);

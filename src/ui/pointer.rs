@@ -9,16 +9,16 @@
 //! the grab moves the particle and leaves it at rest.
 
 use super::edit;
+use super::events::PressedAt;
 use super::pick::Picking;
 use super::view::CanvasView;
 use crate::scene::CurrentScene;
 use crate::sim::*;
 use bevy::ecs::entity::EntityHashSet;
 use bevy::ecs::system::SystemParam;
-use bevy::input::ButtonState;
 use bevy::math::DVec2;
 use bevy::prelude::*;
-use bevy::window::{PrimaryWindow, WindowEvent};
+use bevy::window::PrimaryWindow;
 use bevy_egui::input::EguiWantsInput;
 
 /// How close, in logical pixels, a press must be to a particle to pick it.
@@ -60,52 +60,6 @@ impl Default for Attraction {
             radius: 0.12,
             strength: 200.0,
             active_at: None,
-        }
-    }
-}
-
-/// The frame's pointer events, replayed in order. A frame can bring a press and the moves
-/// after it together (a quick press and drag, a slow frame): a press belongs where it
-/// happened, not where the cursor is at the end of the frame, and a pan moves by the cursor's
-/// path while the button was down.
-#[derive(Resource, Debug, Default)]
-pub struct PressedAt {
-    /// Where the left button went down this frame, if it did.
-    pub left: Option<Vec2>,
-    /// Where the middle button went down this frame, if it did.
-    pub middle: Option<Vec2>,
-    /// How far the cursor moved this frame while the middle button was down.
-    pub middle_drag: Vec2,
-}
-
-/// Fills [`PressedAt`] from the frame's window events.
-pub fn track_presses(
-    mut events: MessageReader<WindowEvent>,
-    mut state: Local<(Option<Vec2>, bool)>,
-    mut pressed: ResMut<PressedAt>,
-) {
-    let (cursor, middle_down) = &mut *state;
-    *pressed = PressedAt::default();
-    for event in events.read() {
-        match event {
-            WindowEvent::CursorMoved(m) => {
-                if *middle_down && let Some(prev) = *cursor {
-                    pressed.middle_drag += m.position - prev;
-                }
-                *cursor = Some(m.position);
-            }
-            WindowEvent::MouseButtonInput(b) => match (b.button, b.state) {
-                (MouseButton::Left, ButtonState::Pressed) => {
-                    pressed.left = pressed.left.or(*cursor);
-                }
-                (MouseButton::Middle, ButtonState::Pressed) => {
-                    *middle_down = true;
-                    pressed.middle = pressed.middle.or(*cursor);
-                }
-                (MouseButton::Middle, ButtonState::Released) => *middle_down = false,
-                _ => {}
-            },
-            _ => {}
         }
     }
 }

@@ -2,7 +2,7 @@
 //! cursor, pan, fit. Picking, adding and cutting all go through [`CanvasView::window_to_world`],
 //! so they stay exact at every zoom and pan.
 
-use super::pointer::PressedAt;
+use super::events::PressedAt;
 use bevy::camera::ScalingMode;
 use bevy::input::mouse::{AccumulatedMouseScroll, MouseScrollUnit};
 use bevy::math::DVec2;
