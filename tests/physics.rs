@@ -194,14 +194,9 @@ fn a_stiffness_change_through_the_resource_takes_effect_on_the_next_step() {
 fn particles_added_at_run_time_join_the_simulation() {
     let mut app = app_with(bare_scene(Integrator::SymplecticEuler, 1e-4));
     app.world_mut().resource_mut::<SimParams>().gravity = DVec2::new(0.0, -9.8);
-    let serial = app
-        .world_mut()
-        .resource_mut::<hooke::sim::Serials>()
-        .next_serial();
-    app.world_mut().spawn((
-        Particle { serial },
-        hooke::sim::Position(DVec2::new(0.2, 0.7)),
-    ));
+    // Spawned like any Bevy entity: its creation order is assigned for it.
+    app.world_mut()
+        .spawn((Particle, hooke::sim::Position(DVec2::new(0.2, 0.7))));
     step(&mut app, 100);
     assert_eq!(solver(&app).particle_count(), 1);
     assert!(pos(&app, 0).y < 0.7);
@@ -292,14 +287,7 @@ fn edits_between_ticks_keep_two_threads_equal_to_one() {
                 world.despawn(e);
             }
             for (a, b) in ends {
-                let serial = world.resource_mut::<hooke::sim::Serials>().next_serial();
-                world.spawn(Spring {
-                    a,
-                    b,
-                    rest: 0.01,
-                    stiffness: 5e3,
-                    serial,
-                });
+                world.spawn(Spring::new(a, b, 0.01, 5e3));
             }
             step(&mut app, 20);
             let sv = solver(&app);

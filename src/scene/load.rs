@@ -148,25 +148,20 @@ pub fn replace_contents(world: &mut World, params: SimParams, expanded: &Expande
     spawn_expanded(world, expanded);
 }
 
-/// Spawns particles and springs; springs index into the particles given here.
+/// Spawns particles and springs (in that order, so their creation order is the list's);
+/// springs index into the particles given here. Returns the particles.
 pub fn spawn_expanded(world: &mut World, expanded: &Expanded) -> Vec<Entity> {
-    let mut serials = world.resource_mut::<Serials>();
-    let first = serials.next_serial();
-    for _ in 1..expanded.particles.len() + expanded.springs.len() {
-        serials.next_serial();
-    }
     let mut particles = Vec::with_capacity(expanded.particles.len());
-    for (i, p) in expanded.particles.iter().enumerate() {
+    for p in &expanded.particles {
+        let vel = if p.pinned {
+            DVec2::ZERO
+        } else {
+            DVec2::from(p.vel)
+        };
         let bundle = (
-            Particle {
-                serial: first + i as u64,
-            },
+            Particle,
             Position(DVec2::from(p.pos)),
-            Velocity(if p.pinned {
-                DVec2::ZERO
-            } else {
-                DVec2::from(p.vel)
-            }),
+            Velocity(vel),
             Mass(p.mass),
         );
         let mut e = world.spawn(bundle);
@@ -175,19 +170,11 @@ pub fn spawn_expanded(world: &mut World, expanded: &Expanded) -> Vec<Entity> {
         }
         particles.push(e.id());
     }
-    let base = first + expanded.particles.len() as u64;
     world.spawn_batch(
         expanded
             .springs
             .iter()
-            .enumerate()
-            .map(|(i, s)| Spring {
-                a: particles[s.a],
-                b: particles[s.b],
-                rest: s.rest,
-                stiffness: s.stiffness,
-                serial: base + i as u64,
-            })
+            .map(|s| Spring::new(particles[s.a], particles[s.b], s.rest, s.stiffness))
             .collect::<Vec<_>>(),
     );
     particles
@@ -220,8 +207,15 @@ pub fn snapshot(world: &mut World) -> Scene {
 /// [`spawn_expanded`] takes to make the same network again. Springs get `stiffness` when it is
 /// set, else their own. Springs whose ends are not both particles are left out.
 pub fn explicit_state(world: &mut World, stiffness: Option<f64>) -> Expanded {
-    let mut particles: Vec<(u64, Entity, super::format::ParticleDef)> = world
-        .query::<(Entity, &Particle, &Position, &Velocity, &Mass, Has<Pinned>)>()
+    let mut particles: Vec<(CreationOrder, Entity, super::format::ParticleDef)> = world
+        .query_filtered::<(
+            Entity,
+            &CreationOrder,
+            &Position,
+            &Velocity,
+            &Mass,
+            Has<Pinned>,
+        ), With<Particle>>()
         .iter(world)
         .map(|(e, p, x, v, m, pinned)| {
             let def = super::format::ParticleDef {
@@ -230,7 +224,7 @@ pub fn explicit_state(world: &mut World, stiffness: Option<f64>) -> Expanded {
                 mass: m.0,
                 pinned,
             };
-            (p.serial, e, def)
+            (*p, e, def)
         })
         .collect();
     particles.sort_by_key(|p| p.0);
@@ -239,17 +233,17 @@ pub fn explicit_state(world: &mut World, stiffness: Option<f64>) -> Expanded {
         .enumerate()
         .map(|(i, p)| (p.1, i))
         .collect();
-    let mut springs: Vec<(u64, super::format::SpringDef)> = world
-        .query::<&Spring>()
+    let mut springs: Vec<(CreationOrder, super::format::SpringDef)> = world
+        .query::<(&Spring, &CreationOrder)>()
         .iter(world)
-        .filter_map(|s| {
+        .filter_map(|(s, order)| {
             let def = super::format::SpringDef {
                 a: *index.get(&s.a)?,
                 b: *index.get(&s.b)?,
                 stiffness: stiffness.unwrap_or(s.stiffness),
                 rest: s.rest,
             };
-            Some((s.serial, def))
+            Some((*order, def))
         })
         .collect();
     springs.sort_by_key(|s| s.0);

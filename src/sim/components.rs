@@ -7,12 +7,50 @@
 use bevy::math::DVec2;
 use bevy::prelude::*;
 
-/// Marks a particle. `serial` is its creation order: the solver orders particles by it, so that
-/// scene order (CSV rows, summation order) survives archetype moves such as pinning.
-#[derive(Component, Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-#[require(Position, Velocity, Mass, Force, ExternalForce, SolverIndex)]
-pub struct Particle {
-    pub serial: u64,
+use bevy::ecs::lifecycle::HookContext;
+use bevy::ecs::world::DeferredWorld;
+
+/// Marks a particle: spawn it like any Bevy entity, `commands.spawn((Particle, Position(p)))`;
+/// velocity, mass (1 kg) and the rest come with it. Its [`CreationOrder`] is assigned when it
+/// is spawned: the solver orders particles by it, so that scene order (CSV rows, summation
+/// order) survives archetype moves such as pinning.
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[require(
+    Position,
+    Velocity,
+    Mass,
+    Force,
+    ExternalForce,
+    SolverIndex,
+    CreationOrder
+)]
+#[component(on_add = assign_creation_order)]
+pub struct Particle;
+
+/// When a particle or spring was made, among all of them: assigned from [`Serials`] when its
+/// [`Particle`] or [`Spring`] is added (a value set by hand, non-zero, is kept). The solver
+/// orders particles and breaks spring ties by it, so results do not depend on archetype layout.
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct CreationOrder(pub u64);
+
+/// The hook of [`Particle`] and [`Spring`]: hands out the next serial (when the world has the
+/// [`Serials`] of [`crate::sim::SimPlugin`]).
+fn assign_creation_order(mut world: DeferredWorld, context: HookContext) {
+    let unset = world
+        .get::<CreationOrder>(context.entity)
+        .is_some_and(|o| o.0 == 0);
+    if !unset {
+        return;
+    }
+    let Some(serial) = world
+        .get_resource_mut::<Serials>()
+        .map(|mut s| s.next_serial())
+    else {
+        return;
+    };
+    if let Some(mut order) = world.get_mut::<CreationOrder>(context.entity) {
+        order.0 = serial;
+    }
 }
 
 /// Position in metres (the scene lives in the unit square by convention).
@@ -60,17 +98,80 @@ pub struct Pinned;
 
 /// A Hooke spring between two particle entities:
 /// `f_a = -k (|x_a - x_b| - rest) (x_a - x_b) / |x_a - x_b|`, and `f_b = -f_a`.
+/// Spawn it like any component, `commands.spawn(Spring::new(a, b, rest, k))`; its
+/// [`CreationOrder`] is assigned when it is spawned.
 #[derive(Component, Debug, Clone, Copy, PartialEq)]
-#[require(SolverIndex)]
+#[require(SolverIndex, CreationOrder)]
+#[component(on_add = assign_creation_order)]
 pub struct Spring {
+    /// One end (a particle entity).
     pub a: Entity,
+    /// The other end.
     pub b: Entity,
     /// Rest length in metres.
     pub rest: f64,
     /// Stiffness k in N/m. [`crate::sim::SimParams::stiffness_override`] replaces it while set.
     pub stiffness: f64,
-    /// Creation order, for a deterministic spring order in the solver.
-    pub serial: u64,
+}
+
+impl Spring {
+    /// A spring from `a` to `b` of rest length `rest` (m) and stiffness `k` (N/m).
+    pub fn new(a: Entity, b: Entity, rest: f64, stiffness: f64) -> Self {
+        Spring {
+            a,
+            b,
+            rest,
+            stiffness,
+        }
+    }
+
+    /// A spring from `a` to `b` at rest at their current distance; `None` unless both are
+    /// particles.
+    pub fn at_current_length(world: &World, a: Entity, b: Entity, stiffness: f64) -> Option<Self> {
+        let at = |e: Entity| {
+            world
+                .get::<Position>(e)
+                .filter(|_| world.get::<Particle>(e).is_some())
+        };
+        let rest = at(a)?.0.distance(at(b)?.0);
+        Some(Spring::new(a, b, rest, stiffness))
+    }
+}
+
+/// A command that joins `particle` to every other particle within `radius` of it, each by a
+/// spring at rest at their current distance (the app's click rule):
+/// `commands.queue(JoinWithin { particle, radius: 0.15, stiffness: 1e4 })`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JoinWithin {
+    /// The particle to join (already spawned).
+    pub particle: Entity,
+    /// m.
+    pub radius: f64,
+    /// N/m.
+    pub stiffness: f64,
+}
+
+impl Command for JoinWithin {
+    type Out = ();
+
+    fn apply(self, world: &mut World) {
+        let Some(&Position(at)) = world.get::<Position>(self.particle) else {
+            return;
+        };
+        let mut near: Vec<(CreationOrder, Entity, f64)> = world
+            .query_filtered::<(Entity, &Position, &CreationOrder), With<Particle>>()
+            .iter(world)
+            .filter(|(e, _, _)| *e != self.particle)
+            .map(|(e, p, o)| (*o, e, p.0.distance(at)))
+            .filter(|(_, _, d)| *d <= self.radius)
+            .collect();
+        near.sort_by_key(|n| n.0);
+        let springs: Vec<Spring> = near
+            .into_iter()
+            .map(|(_, e, d)| Spring::new(self.particle, e, d, self.stiffness))
+            .collect();
+        world.spawn_batch(springs);
+    }
 }
 
 /// Dense index of a particle or spring in the solver's arrays (`u32::MAX` until the next sync
@@ -84,13 +185,14 @@ impl Default for SolverIndex {
     }
 }
 
-/// Hands out creation serials for particles and springs.
+/// Hands out creation serials for particles and springs (see [`CreationOrder`]).
 #[derive(Resource, Debug, Default)]
 pub struct Serials {
     next: u64,
 }
 
 impl Serials {
+    /// The next serial (the first is 1; 0 means unassigned).
     pub fn next_serial(&mut self) -> u64 {
         self.next += 1;
         self.next

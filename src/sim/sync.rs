@@ -42,7 +42,7 @@ impl StructureChanges<'_, '_> {
 
 type ParticleData<'a> = (
     Entity,
-    &'a Particle,
+    &'a CreationOrder,
     Ref<'a, Position>,
     Ref<'a, Velocity>,
     Ref<'a, Mass>,
@@ -51,9 +51,18 @@ type ParticleData<'a> = (
     Has<Kinematic>,
     &'a mut SolverIndex,
 );
-type Particles<'w, 's> = Query<'w, 's, ParticleData<'static>, Without<Spring>>;
-type Springs<'w, 's> =
-    Query<'w, 's, (Entity, Ref<'static, Spring>, &'static mut SolverIndex), Without<Particle>>;
+type Particles<'w, 's> = Query<'w, 's, ParticleData<'static>, (With<Particle>, Without<Spring>)>;
+type Springs<'w, 's> = Query<
+    'w,
+    's,
+    (
+        Entity,
+        Ref<'static, Spring>,
+        &'static CreationOrder,
+        &'static mut SolverIndex,
+    ),
+    Without<Particle>,
+>;
 
 /// Brings ECS edits into the solver. Runs at the start of every fixed tick.
 pub fn sync_into_solver(
@@ -102,7 +111,7 @@ pub fn sync_into_solver(
     }
     let mut springs_changed = false;
     let mut endpoints_changed = false;
-    for (_, spring, index) in &springs {
+    for (_, spring, _, index) in &springs {
         if !spring.is_changed() {
             continue;
         }
@@ -132,7 +141,7 @@ pub fn sync_into_solver(
 /// Repacks every particle and spring. Springs whose endpoints are not both
 /// particles are left out.
 fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &mut Springs) {
-    let mut order: Vec<(u64, Entity)> = particles.iter().map(|p| (p.1.serial, p.0)).collect();
+    let mut order: Vec<(CreationOrder, Entity)> = particles.iter().map(|p| (*p.1, p.0)).collect();
     order.sort_unstable();
     let n = order.len();
     let mut index: EntityHashMap<u32> = EntityHashMap::default();
@@ -161,9 +170,9 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &mut Springs
         kinematic += held as usize;
     }
 
-    let mut packed: Vec<(u64, Entity, PackedSpring)> = springs
+    let mut packed: Vec<(CreationOrder, Entity, PackedSpring)> = springs
         .iter()
-        .filter_map(|(e, s, _)| {
+        .filter_map(|(e, s, order, _)| {
             let (a, b) = (*index.get(&s.a)?, *index.get(&s.b)?);
             let spring = PackedSpring {
                 a,
@@ -171,7 +180,7 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &mut Springs
                 rest: s.rest,
                 k: s.stiffness,
             };
-            Some((s.serial, e, spring))
+            Some((*order, e, spring))
         })
         .collect();
     // Grouped by first end, then second (ties by creation): the spring pass then sums each
@@ -180,7 +189,7 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &mut Springs
     packed.sort_unstable_by_key(|p| (p.2.a, p.2.b, p.0));
     let mut spring_index: EntityHashMap<u32> = EntityHashMap::default();
     spring_index.extend(packed.iter().enumerate().map(|(i, p)| (p.1, i as u32)));
-    for (e, _, mut solver_index) in springs.iter_mut() {
+    for (e, _, _, mut solver_index) in springs.iter_mut() {
         solver_index.0 = spring_index.get(&e).copied().unwrap_or(u32::MAX);
     }
 

@@ -12,7 +12,6 @@ use bevy::prelude::*;
 /// current length. Returns the new particle.
 pub fn add_particle(
     commands: &mut Commands,
-    serials: &mut Serials,
     at: DVec2,
     pinned: bool,
     rules: &ClickRules,
@@ -20,25 +19,13 @@ pub fn add_particle(
     neighbours: &[(Entity, f64)],
 ) -> Entity {
     commands.queue(history::before("add"));
-    let mut particle = commands.spawn((
-        Particle {
-            serial: serials.next_serial(),
-        },
-        Position(at),
-        Mass(rules.mass),
-    ));
+    let mut particle = commands.spawn((Particle, Position(at), Mass(rules.mass)));
     if pinned {
         particle.insert(Pinned);
     }
     let new = particle.id();
     for &(other, rest) in neighbours {
-        commands.spawn(Spring {
-            a: new,
-            b: other,
-            rest,
-            stiffness,
-            serial: serials.next_serial(),
-        });
+        commands.spawn(Spring::new(new, other, rest, stiffness));
     }
     new
 }

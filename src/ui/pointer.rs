@@ -123,7 +123,6 @@ pub fn press(
     scene: Option<Res<CurrentScene>>,
     params: Res<SimParams>,
     solver: Res<Solver>,
-    mut serials: ResMut<Serials>,
     mut picking: ResMut<Picking>,
     mut gesture: ResMut<Gesture>,
 ) {
@@ -157,15 +156,7 @@ pub fn press(
     let pinned =
         shift || (rules.pin_first && solver.particle_count() == 0 && neighbours.is_empty());
     let stiffness = params.stiffness_override.unwrap_or(rules.stiffness);
-    let new = edit::add_particle(
-        &mut commands,
-        &mut serials,
-        at,
-        pinned,
-        &rules,
-        stiffness,
-        &neighbours,
-    );
+    let new = edit::add_particle(&mut commands, at, pinned, &rules, stiffness, &neighbours);
     picking.note_added(&solver, at, new, cell);
 }
 
