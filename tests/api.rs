@@ -22,7 +22,9 @@ fn spawn_like_bevy_and_join_by_the_click_rule() {
     let spring = Spring::at_current_length(world, top, mid, 1e4).unwrap();
     assert!((spring.rest - 0.1).abs() < 1e-12);
     assert!(Spring::at_current_length(world, top, Entity::PLACEHOLDER, 1e4).is_none());
-    let new = world.spawn((Particle, Position(DVec2::new(0.55, 0.8)))).id();
+    let new = world
+        .spawn((Particle, Position(DVec2::new(0.55, 0.8))))
+        .id();
     world.commands().queue(JoinWithin {
         particle: new,
         radius: 0.15,
@@ -30,12 +32,20 @@ fn spawn_like_bevy_and_join_by_the_click_rule() {
     });
     world.flush();
     let springs: Vec<Spring> = world.query::<&Spring>().iter(world).copied().collect();
-    assert_eq!(springs.len(), 2, "joined to top and mid, not far: {springs:?}");
+    assert_eq!(
+        springs.len(),
+        2,
+        "joined to top and mid, not far: {springs:?}"
+    );
     assert!(springs.iter().all(|s| s.a == new && s.b != far));
     // It simulates: the free ones hang from the pinned one.
     advance(world, 2000);
     let solver = world.resource::<Solver>();
     assert_eq!((solver.particle_count(), solver.spring_count()), (4, 2));
     assert_eq!(solver.x[0], DVec2::new(0.5, 0.9), "pinned");
-    assert!(solver.x[2].y < 0.15, "the lone particle fell: {}", solver.x[2]);
+    assert!(
+        solver.x[2].y < 0.15,
+        "the lone particle fell: {}",
+        solver.x[2]
+    );
 }

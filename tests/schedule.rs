@@ -112,3 +112,38 @@ fn a_frame_over_budget_drops_simulated_time_instead_of_stalling() {
         .dropped_seconds;
     assert!(dropped > 0.3, "dropped {dropped} s of simulated time");
 }
+
+/// The step schedule is built with ambiguity detection at the error level: a user system that
+/// writes the solver inside a step set without an order against the passes fails when the
+/// schedule is built, instead of racing; ordered, it runs every step.
+#[test]
+fn an_unordered_user_system_in_the_step_fails_at_build_time() {
+    use bevy::prelude::*;
+    use hooke::sim::{PhysicsStep, Solver, StepSystems};
+    fn meddle(_solver: ResMut<Solver>) {}
+    let mut app = app_with(presets::resolve("rope").unwrap().scene);
+    app.add_systems(PhysicsStep, meddle.in_set(StepSystems::Integrate));
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        hooke::sim::advance(app.world_mut(), 1);
+    }));
+    let message = result
+        .err()
+        .and_then(|e| e.downcast_ref::<String>().cloned())
+        .expect("the schedule refuses to build");
+    assert!(message.contains("conflicting"), "{message}");
+
+    #[derive(Resource, Default)]
+    struct Seen(u64);
+    fn count(_solver: Res<Solver>, mut seen: ResMut<Seen>) {
+        seen.0 += 1;
+    }
+    let mut app = app_with(presets::resolve("rope").unwrap().scene);
+    app.init_resource::<Seen>().add_systems(
+        PhysicsStep,
+        count
+            .after(StepSystems::Forces)
+            .before(StepSystems::Integrate),
+    );
+    step(&mut app, 50);
+    assert_eq!(app.world().resource::<Seen>().0, 50);
+}

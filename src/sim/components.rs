@@ -80,7 +80,7 @@ pub struct Force(pub DVec2);
 /// user's own field. The solver adds it to gravity wherever it evaluates forces, so every
 /// integrator sees it at every stage (velocity Verlet's second evaluation, RK4's four, implicit
 /// Euler's right-hand side). It is held constant over a fixed tick: write it from a system in
-/// `Update` or `FixedUpdate` before [`crate::sim::PhysicsSet::Prepare`]. A scene where every
+/// `Update` or `FixedUpdate` before [`crate::sim::PhysicsSystems::Prepare`]. A scene where every
 /// external force is zero pays nothing for it.
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
 pub struct ExternalForce(pub DVec2);

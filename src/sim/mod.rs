@@ -22,8 +22,10 @@ pub use integrators::CgSettings;
 pub use parallel::SolverThreads;
 pub use params::*;
 pub use profile::PassTimes;
+#[allow(deprecated)]
+pub use schedule::{PhysicsSet, StepSet};
 pub use schedule::{
-    PhysicsSet, PhysicsStep, SimPlugin, StepBudget, StepSet, TickPlan, advance, pack,
+    PhysicsStep, PhysicsSystems, SimPlugin, StepBudget, StepSystems, TickPlan, advance, pack,
 };
 pub use solver::{Energy, PackedSpring, Solver};
 pub use stability::StabilityEstimate;

@@ -5,7 +5,7 @@
 //! the time since the mark before it. The passes' own run conditions still apply, so a pass
 //! that does not run shows (almost) no time.
 
-use super::schedule::{PhysicsStep, StepSet};
+use super::schedule::{PhysicsStep, StepSystems};
 use bevy::prelude::*;
 use serde::Serialize;
 use std::time::Instant;
@@ -49,20 +49,20 @@ pub fn enable(app: &mut App) {
     app.init_resource::<PassTimes>();
     app.edit_schedule(PhysicsStep, |schedule| {
         schedule.add_systems((
-            start.before(StepSet::Forces),
+            start.before(StepSystems::Forces),
             lap(|t| &mut t.forces)
-                .after(StepSet::Forces)
-                .before(StepSet::Integrate),
+                .after(StepSystems::Forces)
+                .before(StepSystems::Integrate),
             lap(|t| &mut t.integrate)
-                .after(StepSet::Integrate)
-                .before(StepSet::Damping),
+                .after(StepSystems::Integrate)
+                .before(StepSystems::Damping),
             lap(|t| &mut t.damping)
-                .after(StepSet::Damping)
-                .before(StepSet::Ground),
+                .after(StepSystems::Damping)
+                .before(StepSystems::Ground),
             lap(|t| &mut t.ground)
-                .after(StepSet::Ground)
-                .before(StepSet::Advance),
-            lap(|t| &mut t.advance).after(StepSet::Advance),
+                .after(StepSystems::Ground)
+                .before(StepSystems::Advance),
+            lap(|t| &mut t.advance).after(StepSystems::Advance),
         ));
     });
 }

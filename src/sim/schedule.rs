@@ -1,7 +1,7 @@
 //! When the simulation runs: the fixed-tick sets, the per-step schedule and its ordered sets.
 //!
 //! At the assignment's dt = 1e-4 s the simulation needs 10 000 steps per simulated second, far
-//! more than frames. So, as avian runs its substeps, one fixed tick ([`PhysicsSet::Step`])
+//! more than frames. So, as avian runs its substeps, one fixed tick ([`PhysicsSystems::Step`])
 //! runs the [`PhysicsStep`] schedule [`TickPlan::steps_per_tick`] times in a tight loop with a
 //! single-threaded executor; the ECS sync happens once per tick, not per step.
 
@@ -14,42 +14,77 @@ use super::solver::Solver;
 use super::sync::{sync_from_solver, sync_into_solver};
 use super::tear;
 use bevy::app::{FixedMain, RunFixedMainLoop, RunFixedMainLoopSystems};
-use bevy::ecs::schedule::{ScheduleLabel, SingleThreadedExecutor};
+use bevy::ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
 use bevy::prelude::*;
 use bevy::time::Fixed;
 use std::time::{Duration, Instant};
 
-/// The sets of a fixed tick, in `FixedUpdate`, in this order.
+/// The sets of a fixed tick, in `FixedUpdate`, in this order. A user system joins the tick by
+/// going into one of them, or between two (`.after(PhysicsSystems::Writeback)`):
+///
+/// ```
+/// # use bevy::prelude::*;
+/// # use hooke::sim::{PhysicsSystems, Solver};
+/// fn log_energy(solver: Res<Solver>) { /* read the state of the tick just taken */ }
+/// let mut app = hooke::headless_app();
+/// app.add_systems(FixedUpdate, log_energy.after(PhysicsSystems::Writeback));
+/// ```
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum PhysicsSet {
-    /// Bring ECS edits into the solver.
+pub enum PhysicsSystems {
+    /// 1. Check what users wrote ([`super::inputs`]) and bring ECS edits into the solver:
+    ///    write [`super::ExternalForce`], positions and the like before it.
     Prepare,
-    /// Run this tick's steps.
+    /// 2. Run this tick's steps (the [`PhysicsStep`] schedule, [`TickPlan::steps_per_tick`]
+    ///    times).
     Step,
-    /// Write results back into the components.
+    /// 3. Write results back into the components.
     Writeback,
-    /// Break overstretched springs ([`super::tear`]; only while tearing is on).
+    /// 4. Break overstretched springs ([`super::tear`]; only while tearing is on).
     Tear,
 }
 
-/// One step of size dt. Its sets run in this order.
+/// The old name of [`PhysicsSystems`] (Bevy names system sets `...Systems` since 0.17).
+#[deprecated(since = "0.1.0", note = "renamed to `PhysicsSystems`")]
+pub type PhysicsSet = PhysicsSystems;
+
+/// One step of size dt. Its sets ([`StepSystems`]) run in order, with a single-threaded
+/// executor, and the schedule is built with ambiguity detection at the error level: a system
+/// added to it without an order against the systems it conflicts with fails at build time
+/// instead of racing silently.
 #[derive(ScheduleLabel, Debug, Clone, PartialEq, Eq, Hash)]
 pub struct PhysicsStep;
 
-/// The passes of one step, in [`PhysicsStep`], in this order.
+/// The passes of one step, in [`PhysicsStep`], in this order (the README's step semantics):
+///
+/// ```
+/// # use bevy::prelude::*;
+/// # use hooke::sim::{PhysicsStep, StepSystems, Solver};
+/// // A system that sees every step's forces before the integrator uses them.
+/// fn inspect(solver: Res<Solver>) {}
+/// let mut app = hooke::headless_app();
+/// app.add_systems(
+///     PhysicsStep,
+///     inspect.after(StepSystems::Forces).before(StepSystems::Integrate),
+/// );
+/// ```
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum StepSet {
-    /// f = m g + Σ spring forces at the start-of-step positions.
+pub enum StepSystems {
+    /// 1. f = m g + f_ext + Σ spring forces at the start-of-step positions.
     Forces,
-    /// The integrator's velocity update (and what it needs for the position update).
+    /// 2. The integrator's velocity update (and what it needs for the position update).
     Integrate,
-    /// v *= exp(-μ dt).
+    /// 3. v *= exp(-μ dt).
     Damping,
-    /// Ground contact on the start-of-step position.
+    /// 4. Ground contact on the start-of-step position.
     Ground,
-    /// The position update, x += dt u, with u the integrator's drift velocity; checks finiteness.
+    /// 5. The position update, x += dt u, with u the integrator's drift velocity; checks
+    ///    finiteness.
     Advance,
 }
+
+/// The old name of [`StepSystems`].
+#[deprecated(since = "0.1.0", note = "renamed to `StepSystems`")]
+pub type StepSet = StepSystems;
 
 /// How many steps one fixed tick runs.
 #[derive(Resource, Debug, Clone, Copy, PartialEq)]
@@ -135,10 +170,10 @@ impl Plugin for SimPlugin {
         app.configure_sets(
             FixedUpdate,
             (
-                PhysicsSet::Prepare,
-                PhysicsSet::Step,
-                PhysicsSet::Writeback,
-                PhysicsSet::Tear,
+                PhysicsSystems::Prepare,
+                PhysicsSystems::Step,
+                PhysicsSystems::Writeback,
+                PhysicsSystems::Tear,
             )
                 .chain(),
         )
@@ -150,22 +185,22 @@ impl Plugin for SimPlugin {
                     sync_into_solver.run_if(inputs::inputs_valid),
                 )
                     .chain()
-                    .in_set(PhysicsSet::Prepare),
+                    .in_set(PhysicsSystems::Prepare),
                 run_steps
-                    .in_set(PhysicsSet::Step)
+                    .in_set(PhysicsSystems::Step)
                     .run_if(simulation_running),
                 sync_from_solver
-                    .in_set(PhysicsSet::Writeback)
+                    .in_set(PhysicsSystems::Writeback)
                     .run_if(inputs::inputs_valid),
                 (
                     tear::find_torn_springs.run_if(tear::tearing_enabled),
                     tear::remove_torn_springs.run_if(tear::tears_pending),
                 )
                     .chain()
-                    .in_set(PhysicsSet::Tear),
-                enforce_step_budget.after(PhysicsSet::Writeback),
+                    .in_set(PhysicsSystems::Tear),
+                enforce_step_budget.after(PhysicsSystems::Writeback),
                 super::watch::watch_energy
-                    .after(PhysicsSet::Writeback)
+                    .after(PhysicsSystems::Writeback)
                     .run_if(resource_exists::<super::watch::EnergyWatch>),
             ),
         )
@@ -179,13 +214,17 @@ impl Plugin for SimPlugin {
         app.edit_schedule(PhysicsStep, |schedule| {
             schedule
                 .set_executor(SingleThreadedExecutor::default())
+                .set_build_settings(ScheduleBuildSettings {
+                    ambiguity_detection: LogLevel::Error,
+                    ..default()
+                })
                 .configure_sets(
                     (
-                        StepSet::Forces,
-                        StepSet::Integrate,
-                        StepSet::Damping,
-                        StepSet::Ground,
-                        StepSet::Advance,
+                        StepSystems::Forces,
+                        StepSystems::Integrate,
+                        StepSystems::Damping,
+                        StepSystems::Ground,
+                        StepSystems::Advance,
                     )
                         .chain(),
                 )
@@ -195,7 +234,7 @@ impl Plugin for SimPlugin {
                         accumulate_spring_forces.run_if(scene_has_springs),
                     )
                         .chain()
-                        .in_set(StepSet::Forces),
+                        .in_set(StepSystems::Forces),
                     (
                         explicit_euler.run_if(integrator_is(Integrator::ExplicitEuler)),
                         symplectic_euler.run_if(integrator_is(Integrator::SymplecticEuler)),
@@ -203,14 +242,16 @@ impl Plugin for SimPlugin {
                         rk4.run_if(integrator_is(Integrator::Rk4)),
                         implicit_euler.run_if(integrator_is(Integrator::ImplicitEuler)),
                     )
-                        .in_set(StepSet::Integrate),
+                        // One runs; chained, so that they are ordered for ambiguity detection.
+                        .chain()
+                        .in_set(StepSystems::Integrate),
                     damp_velocity
                         .run_if(damping_enabled)
-                        .in_set(StepSet::Damping),
+                        .in_set(StepSystems::Damping),
                     ground_contact
                         .run_if(ground_enabled)
-                        .in_set(StepSet::Ground),
-                    advance_positions.in_set(StepSet::Advance),
+                        .in_set(StepSystems::Ground),
+                    advance_positions.in_set(StepSystems::Advance),
                 ));
         });
     }
