@@ -47,7 +47,7 @@ fn free_end(integrator: Integrator, wind: f64) -> DVec2 {
     advance(world, 20_000);
     *world
         .resource::<Solver>()
-        .x
+        .x()
         .last()
         .expect("a rope has an end")
 }

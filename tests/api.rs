@@ -42,10 +42,10 @@ fn spawn_like_bevy_and_join_by_the_click_rule() {
     advance(world, 2000);
     let solver = world.resource::<Solver>();
     assert_eq!((solver.particle_count(), solver.spring_count()), (4, 2));
-    assert_eq!(solver.x[0], DVec2::new(0.5, 0.9), "pinned");
+    assert_eq!(solver.x()[0], DVec2::new(0.5, 0.9), "pinned");
     assert!(
-        solver.x[2].y < 0.15,
+        solver.x()[2].y < 0.15,
         "the lone particle fell: {}",
-        solver.x[2]
+        solver.x()[2]
     );
 }

@@ -48,7 +48,7 @@ fn trajectory(scene: Scene) -> Vec<(Vec<DVec2>, Vec<DVec2>)> {
         .map(|_| {
             step(&mut app, steps / CHECKPOINTS);
             let s = solver(&app);
-            (s.x.clone(), s.v.clone())
+            (s.x().to_vec(), s.v().to_vec())
         })
         .collect()
 }

@@ -144,7 +144,7 @@ fn a_long_pinned_chain_sags_to_its_exact_static_shape() {
         if o.status != SimStatus::Running {
             continue; // detected above its limit (explicit Euler), checked by `run`
         }
-        let x = &solver(&app).x;
+        let x = &solver(&app).x();
         // Spring j (from the top, j = 0..n) carries the n - j particles below it.
         let mut worst: f64 = 0.0;
         let mut y = 0.98;
@@ -183,14 +183,14 @@ fn a_fast_impact_never_tunnels_deeper_than_one_step() {
         let (mut lowest, mut fastest) = (f64::MAX, 0.0f64);
         for _ in 0..1500 {
             fastest = solver(&app)
-                .v
+                .v()
                 .iter()
                 .map(|v| v.length())
                 .fold(fastest, f64::max);
             if hooke::sim::advance(app.world_mut(), 1) == 0 {
                 break;
             }
-            lowest = solver(&app).x.iter().map(|p| p.y).fold(lowest, f64::min);
+            lowest = solver(&app).x().iter().map(|p| p.y).fold(lowest, f64::min);
         }
         assert!(fastest >= 100.0);
         println!("{integrator}: lowest y {lowest:.3e} m, fastest {fastest:.1} m/s");
@@ -201,7 +201,7 @@ fn a_fast_impact_never_tunnels_deeper_than_one_step() {
         if *app.world().resource::<SimStatus>() == SimStatus::Running {
             assert!(
                 solver(&app)
-                    .x
+                    .x()
                     .iter()
                     .all(|p| p.y > -dt * fastest && p.is_finite())
             );
@@ -223,7 +223,7 @@ fn at_a_large_step_implicit_euler_stays_stable_and_reaches_the_static_shape() {
         println!("{integrator}: h·ω/limit {:.2}, {:?}", o.margin, o.status);
         if integrator == Integrator::ImplicitEuler {
             assert_eq!(o.status, SimStatus::Running);
-            let x = &solver(&app).x;
+            let x = &solver(&app).x();
             let extension = x[0].y - x[n].y - 0.5;
             let expected = m * g * (n * (n + 1)) as f64 / (2.0 * k);
             assert!(
@@ -251,7 +251,7 @@ fn a_nearly_collinear_network() {
         );
         if o.status == SimStatus::Running {
             // It sags under gravity, symmetrically.
-            let x = &solver(&app).x;
+            let x = &solver(&app).x();
             assert!(x[2].y < 0.7 - 1e-4, "{integrator}: did not sag");
             assert!(
                 (x[1].y - x[3].y).abs() < 1e-3,

@@ -28,7 +28,7 @@ fn cloth32_checksums_match_the_reference() {
         let app = run_cloth(integrator);
         let s = solver(&app);
         assert_eq!((s.particle_count(), s.spring_count()), (1024, 3906));
-        let sum: f64 = s.x.iter().map(|p| p.x + p.y).sum();
+        let sum: f64 = s.x().iter().map(|p| p.x + p.y).sum();
         let rel = (sum - expected).abs() / expected;
         assert!(
             rel < 1e-12,
@@ -54,7 +54,7 @@ fn cloth32_positions_match_the_peer_state() {
         for line in text.lines().skip(1) {
             let f: Vec<f64> = line.split(',').map(|v| v.parse().unwrap()).collect();
             let i = f[0] as usize;
-            let d = (s.x[i].x - f[1]).abs().max((s.x[i].y - f[2]).abs());
+            let d = (s.x()[i].x - f[1]).abs().max((s.x()[i].y - f[2]).abs());
             assert!(
                 d < 1e-12,
                 "{integrator}: particle {i} is {d:e} from the reference"

@@ -186,8 +186,8 @@ fn a_saved_scene_loads_back_unchanged() {
     let mut again = hooke::headless_app();
     load_into_world(again.world_mut(), &back);
     hooke::sim::pack(again.world_mut()).unwrap();
-    assert_eq!(solver(&again).x, solver(&app).x);
-    assert_eq!(solver(&again).v, solver(&app).v);
+    assert_eq!(solver(&again).x(), solver(&app).x());
+    assert_eq!(solver(&again).v(), solver(&app).v());
 }
 
 #[test]

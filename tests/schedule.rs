@@ -77,7 +77,7 @@ fn fixed_timestep_loop_matches_direct_stepping() {
     );
     let mut direct = app_with(scene);
     step(&mut direct, steps);
-    assert_eq!(solver(&driven).x, solver(&direct).x);
+    assert_eq!(solver(&driven).x(), solver(&direct).x());
 }
 
 /// When steps cost more than the frame budget, the frame stops after the tick that ran over:

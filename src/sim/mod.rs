@@ -1,25 +1,32 @@
-//! The simulation: data model, parameters, packed solver, kernels and schedule.
+//! The simulation as a Bevy plugin: the data model (components), the parameters and status
+//! (resources), the schedule (public system sets), and the read-only packed [`Solver`].
+//!
+//! The solver's machinery (kernels, the AVX pass, the stiffness blocks, the thread splits, the
+//! integrators' scratch buffers, the ECS sync) is private to the crate: it holds invariants
+//! (array lengths, index order, thread-part boundaries) that only the sync maintains, and it
+//! changes from release to release. Users change the simulation through components and
+//! resources, and read it through [`Solver`]'s accessors.
 
 pub mod components;
 pub mod grid;
 pub mod inputs;
-pub mod integrators;
-pub mod kernels;
-pub mod parallel;
+pub(crate) mod integrators;
+pub(crate) mod kernels;
+pub(crate) mod parallel;
 pub mod params;
 pub mod profile;
 pub mod schedule;
 pub mod solver;
 pub mod stability;
-pub mod stiffness;
-pub mod sync;
+pub(crate) mod stiffness;
+pub(crate) mod sync;
 pub mod tear;
 pub mod watch;
-pub mod wide;
+pub(crate) mod wide;
 
 pub use components::*;
 pub use integrators::CgSettings;
-pub use parallel::SolverThreads;
+pub use parallel::{PARALLEL_MIN_SPRINGS, SolverThreads};
 pub use params::*;
 pub use profile::PassTimes;
 #[allow(deprecated)]

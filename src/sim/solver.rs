@@ -17,52 +17,109 @@ pub struct PackedSpring {
     pub k: f64,
 }
 
+/// The packed copy of the simulation the step loop runs on (see the module docs).
 #[derive(Resource, Debug, Default)]
 pub struct Solver {
     /// Particle entity of each dense index, in creation order.
-    pub entities: Vec<Entity>,
-    pub x: Vec<DVec2>,
-    pub v: Vec<DVec2>,
+    pub(crate) entities: Vec<Entity>,
+    pub(crate) x: Vec<DVec2>,
+    pub(crate) v: Vec<DVec2>,
     /// Force at the start of the current step.
-    pub f: Vec<DVec2>,
-    pub mass: Vec<f64>,
+    pub(crate) f: Vec<DVec2>,
+    pub(crate) mass: Vec<f64>,
     /// 1/m, and 0 for a pinned particle: the velocity update then leaves it at rest, with no
     /// branch in the loop.
-    pub inv_mass: Vec<f64>,
+    pub(crate) inv_mass: Vec<f64>,
     /// Each particle's [`crate::sim::ExternalForce`], added to gravity wherever forces are
     /// evaluated; read only while `external_active`.
-    pub external: Vec<DVec2>,
+    pub(crate) external: Vec<DVec2>,
     /// Some external force is non-zero. When false, the force passes skip `external` entirely.
-    pub external_active: bool,
+    pub(crate) external_active: bool,
     /// How many particles are [`crate::sim::Kinematic`] (held by the user).
-    pub kinematic: usize,
+    pub(crate) kinematic: usize,
     /// The velocity the position update moves each particle with (explicit Euler: the velocity
     /// at the start of the step).
-    pub drift: Vec<DVec2>,
+    pub(crate) drift: Vec<DVec2>,
     /// Spring entity of each packed spring, in creation order.
-    pub spring_entities: Vec<Entity>,
-    pub springs: Vec<PackedSpring>,
+    pub(crate) spring_entities: Vec<Entity>,
+    pub(crate) springs: Vec<PackedSpring>,
     /// Each spring's own stiffness, kept so that clearing the override restores it.
-    pub own_stiffness: Vec<f64>,
+    pub(crate) own_stiffness: Vec<f64>,
     /// The stiffness override the packed `k` values reflect.
-    pub applied_override: Option<f64>,
+    pub(crate) applied_override: Option<f64>,
     /// Set by the position update when the step produced a non-finite position or velocity.
-    pub non_finite: bool,
+    pub(crate) non_finite: bool,
     /// Work buffers of the multi-stage integrators and the implicit solve's counters.
-    pub scratch: super::integrators::Scratch,
+    pub(crate) scratch: super::integrators::Scratch,
     /// Per-thread buffers of the parallel spring pass.
-    pub spring_buffers: super::parallel::SpringBuffers,
+    pub(crate) spring_buffers: super::parallel::SpringBuffers,
+}
+
+/// Read access for users: the packed state is the solver's own (the sync writes it, the
+/// passes step it), so it is read through these and changed through the components.
+impl Solver {
+    /// Particle entity of each dense index, in creation order.
+    pub fn entities(&self) -> &[Entity] {
+        &self.entities
+    }
+    /// Positions, m.
+    pub fn x(&self) -> &[DVec2] {
+        &self.x
+    }
+    /// Velocities, m/s.
+    pub fn v(&self) -> &[DVec2] {
+        &self.v
+    }
+    /// The force on each particle at the start of the last step, N.
+    pub fn f(&self) -> &[DVec2] {
+        &self.f
+    }
+    /// Masses, kg.
+    pub fn mass(&self) -> &[f64] {
+        &self.mass
+    }
+    /// 1/m, and 0 for a pinned or kinematic particle.
+    pub fn inv_mass(&self) -> &[f64] {
+        &self.inv_mass
+    }
+    /// Each particle's external force, N (see [`crate::sim::ExternalForce`]).
+    pub fn external(&self) -> &[DVec2] {
+        &self.external
+    }
+    /// Whether some external force is non-zero.
+    pub fn external_active(&self) -> bool {
+        self.external_active
+    }
+    /// How many particles are [`crate::sim::Kinematic`].
+    pub fn kinematic(&self) -> usize {
+        self.kinematic
+    }
+    /// The packed springs (ends as dense particle indices; `k` the stiffness in effect).
+    pub fn springs(&self) -> &[PackedSpring] {
+        &self.springs
+    }
+    /// Spring entity of each packed spring.
+    pub fn spring_entities(&self) -> &[Entity] {
+        &self.spring_entities
+    }
+    /// Mean conjugate-gradient iterations per implicit Euler step so far, if any were taken.
+    pub fn cg_iterations_per_step(&self) -> Option<f64> {
+        self.scratch.cg_iterations_per_step()
+    }
 }
 
 impl Solver {
+    /// Particles in the packed state.
     pub fn particle_count(&self) -> usize {
         self.x.len()
     }
 
+    /// Springs in the packed state.
     pub fn spring_count(&self) -> usize {
         self.springs.len()
     }
 
+    /// Whether forces leave particle `i` in place (pinned or kinematic).
     pub fn is_pinned(&self, i: usize) -> bool {
         self.inv_mass[i] == 0.0
     }
@@ -110,6 +167,7 @@ pub struct Energy {
 }
 
 impl Energy {
+    /// The sum of the three.
     pub fn total(&self) -> f64 {
         self.kinetic + self.potential_gravity + self.potential_springs
     }

@@ -56,11 +56,11 @@ pub fn solver(app: &App) -> &Solver {
 }
 
 pub fn pos(app: &App, i: usize) -> DVec2 {
-    solver(app).x[i]
+    solver(app).x()[i]
 }
 
 pub fn vel(app: &App, i: usize) -> DVec2 {
-    solver(app).v[i]
+    solver(app).v()[i]
 }
 
 /// The workspace's `shared/` folder (beside the project root), if present.
