@@ -1,12 +1,58 @@
+#![warn(missing_docs)]
 //! hooke: an interactive 2D mass-spring simulator on Bevy.
 //!
+//! # Quick start
+//!
+//! A headless app (`MinimalPlugins` + [`SimPlugin`]), a pinned particle and a free one joined
+//! by a spring, spawned like any Bevy entities, then one simulated second:
+//!
+//! ```
+//! use bevy::math::DVec2;
+//! use bevy::prelude::*;
+//! use hooke::sim::{Particle, Pinned, Position, SimParams, Solver, Spring, advance};
+//!
+//! let mut app = hooke::headless_app();
+//! let world = app.world_mut();
+//! world.resource_mut::<SimParams>().paused = false;
+//! let top = world.spawn((Particle, Position(DVec2::new(0.5, 0.9)), Pinned)).id();
+//! let bob = world.spawn((Particle, Position(DVec2::new(0.6, 0.9)))).id();
+//! world.spawn(Spring::new(top, bob, 0.1, 1e4));
+//!
+//! let steps = advance(world, 10_000); // dt = 1e-4 s, through the app's fixed ticks
+//! assert_eq!(steps, 10_000);
+//! let solver = world.resource::<Solver>();
+//! assert!(solver.x()[1].y < 0.9, "the bob swung down");
+//! println!("energy after 1 s: {:.3} J", solver.energy(DVec2::new(0.0, -9.8)).total());
+//! ```
+//!
+//! In a full Bevy app, add [`SimPlugin`] to your plugins: the simulation runs in
+//! `FixedUpdate` in the ordered sets [`sim::PhysicsSystems`], and each step in the
+//! [`sim::PhysicsStep`] schedule's [`sim::StepSystems`]; `examples/` has a headless app, an
+//! app with its own drawing (`embed`) and a user force (`custom_force`).
+//!
+//! # Modules
+//!
 //! * [`sim`]: the headless simulation ([`sim::SimPlugin`]): particles and springs as entities,
-//!   a packed solver, fixed-tick systems in ordered sets.
+//!   parameters and status as resources, fixed-tick systems in ordered public sets, and the
+//!   packed [`sim::Solver`] (read-only).
 //! * [`scene`]: the RON scene format, generators, validation and loading.
 //! * [`runner`]: headless runs of a scene (`hooke run`).
-//! * [`bench`]: measured reports (`hooke bench ...`).
-//! * `ui` (feature `gui`): the desktop app ([`ui::AppPlugin`]): panel, pointer gestures (grab,
+//! * [`bench`](mod@bench): measured reports (`hooke bench ...`).
+//! * `ui` (feature `gui`): the desktop app (`ui::AppPlugin`): panel, pointer gestures (grab,
 //!   add, cut, attract), keyboard edits, undo history, zoom and pan.
+//!
+//! # What is public, and why
+//!
+//! Users change the simulation through what Bevy users know: components ([`sim::Particle`],
+//! [`sim::Position`], [`sim::Velocity`], [`sim::Mass`], [`sim::Pinned`],
+//! [`sim::Kinematic`], [`sim::ExternalForce`], [`sim::Spring`]), resources
+//! ([`sim::SimParams`] and the others in [`sim`]) and system sets to order their own systems
+//! against. Whatever they write is checked before every tick ([`sim::inputs`]): a bad value
+//! pauses the simulation with a status that names it, and never panics. The packed state is
+//! read through [`sim::Solver`]'s accessors. The solver's machinery (kernels, the AVX pass,
+//! the stiffness blocks, thread splits, the integrators' scratch buffers and the ECS sync) is
+//! private to the crate: it keeps invariants only the sync maintains, and it changes as the
+//! solver gets faster.
 //!
 //! Outside forces enter through one input: each particle's [`sim::ExternalForce`], which the
 //! solver adds wherever it evaluates forces (every stage of every integrator). The app's mouse

@@ -10,6 +10,7 @@ use std::time::Instant;
 /// How long to run.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Duration {
+    /// This many steps.
     Steps(u64),
     /// Simulated seconds; rounded to the nearest whole number of steps.
     Time(f64),
@@ -18,9 +19,13 @@ pub enum Duration {
 /// Overrides applied on top of the scene.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Overrides {
+    /// Integrator (overrides the scene's).
     pub integrator: Option<Integrator>,
+    /// Time step, s (overrides the scene's).
     pub dt: Option<f64>,
+    /// Stiffness of every spring, N/m.
     pub stiffness: Option<f64>,
+    /// Damping rate μ, 1/s (overrides the scene's).
     pub damping: Option<f64>,
     /// Tearing strain (overrides the scene's `tear`).
     pub tear: Option<f64>,
@@ -55,21 +60,33 @@ impl Overrides {
 /// What a run reports (`--json`).
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct RunReport {
+    /// The scene's path.
     pub scene: String,
+    /// The integrator's CLI name.
     pub integrator: String,
+    /// Time step, s.
     pub dt: f64,
     /// Steps asked for.
     pub steps: u64,
     /// Steps taken (fewer when a step blew up).
     pub steps_taken: u64,
+    /// Simulated time at the end, s.
     pub sim_time: f64,
+    /// Particles.
     pub particles: usize,
+    /// Springs at the end.
     pub springs: usize,
+    /// Solver threads.
     pub threads: usize,
+    /// Wall time of the stepping, s.
     pub wall_s: f64,
+    /// Steps per wall-clock second.
     pub steps_per_s: f64,
+    /// Spring updates per wall-clock second.
     pub spring_updates_per_s: f64,
+    /// Total energy before the first step, J.
     pub energy_start: f64,
+    /// Total energy at the end, J.
     pub energy_end: f64,
     /// dt · ω_max at the start (power-iteration estimate of the fastest mode).
     pub h_omega_max: f64,
@@ -77,6 +94,7 @@ pub struct RunReport {
     pub stable_dt: Option<f64>,
     /// Gershgorin upper bound on ω_max, rad/s.
     pub omega_max_bound: f64,
+    /// Whether every step stayed finite (and the energy watch, when on, never stopped it).
     pub finite: bool,
     /// Springs broken by tearing during the run (0 when tearing is off).
     pub springs_torn: u64,
@@ -94,11 +112,14 @@ pub struct RunReport {
 
 /// A finished run: the report and the world, to read the final state from.
 pub struct Run {
+    /// What the run reports.
     pub report: RunReport,
+    /// The headless app, holding the final state.
     pub app: bevy::app::App,
 }
 
 impl Run {
+    /// The final packed state.
     pub fn solver(&self) -> &Solver {
         self.app.world().resource::<Solver>()
     }
@@ -114,6 +135,7 @@ impl Run {
         Ok(())
     }
 
+    /// Writes [`Run::write_csv`]'s CSV to a file.
     pub fn save_csv(&self, path: &Path) -> std::io::Result<()> {
         let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
         self.write_csv(&mut f)?;

@@ -11,15 +11,25 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 #[derive(Debug, Clone, Serialize)]
+/// One measured figure: an integrator on a cloth at a thread count.
 pub struct Row {
+    /// The cloth (`cloth17`, ... `cloth501`).
     pub scene: String,
+    /// Particles in the cloth.
     pub particles: usize,
+    /// Springs in the cloth.
     pub springs: usize,
+    /// The integrator's CLI name.
     pub integrator: String,
+    /// Solver threads.
     pub threads: usize,
+    /// Steps taken (the median run's).
     pub steps: u64,
+    /// Wall time of the median run, s.
     pub wall_s: f64,
+    /// Spring updates per second (springs × steps / wall).
     pub spring_updates_per_s: f64,
+    /// Nanoseconds per spring update.
     pub ns_per_spring_update: f64,
 }
 
@@ -57,8 +67,11 @@ fn cost(i: Integrator) -> f64 {
 /// How long a cloth took to load (validate, expand the generator, spawn, pack).
 #[derive(Debug, Clone)]
 pub struct LoadTime {
+    /// The cloth.
     pub scene: String,
+    /// Its springs.
     pub springs: usize,
+    /// Load time, s.
     pub seconds: f64,
 }
 
@@ -133,13 +146,19 @@ pub fn run(
 /// ([`super::traffic`]) at the bandwidth measured for the cloth's working set.
 #[derive(Debug, Clone)]
 pub struct Bound {
+    /// The cloth.
     pub scene: String,
+    /// Solver threads.
     pub threads: usize,
+    /// Modelled bytes moved per spring update.
     pub bytes_per_update: f64,
+    /// The step's working set, MB.
     pub working_set_mb: f64,
+    /// Read-modify-write bandwidth measured at that size, GB/s.
     pub bandwidth_gb_s: f64,
     /// Spring updates per second the bandwidth allows.
     pub bound: f64,
+    /// Spring updates per second measured.
     pub measured: f64,
 }
 
@@ -165,6 +184,7 @@ pub fn bounds(rows: &[Row]) -> Result<Vec<Bound>, String> {
         .collect()
 }
 
+/// The rows as CSV, one per figure, with a header.
 pub fn csv(rows: &[Row]) -> String {
     let mut s = String::from(
         "scene,particles,springs,integrator,threads,steps,wall_s,spring_updates_per_s,ns_per_spring_update\n",
@@ -187,6 +207,7 @@ pub fn csv(rows: &[Row]) -> String {
     s
 }
 
+/// The report as markdown: the figures, the load times and the bandwidth bounds, with the command that made it.
 pub fn markdown(rows: &[Row], loads: &[LoadTime], bounds: &[Bound], command: &str) -> String {
     let mut s = String::from("# Performance\n\n");
     let _ = writeln!(

@@ -19,16 +19,21 @@ use std::path::Path;
 pub const LARGEST_DT: f64 = 0.1;
 
 #[derive(Debug, Clone, Serialize)]
+/// One hard scene under one integrator: the predicted and the measured stable dt.
 pub struct Row {
+    /// The scene's file stem.
     pub scene: String,
+    /// The integrator's CLI name.
     pub integrator: String,
     /// The stable dt the estimate predicts (infinite: unconditional).
     pub theory_dt: f64,
     /// The largest dt found stable (a lower bound when `limit_found` is false).
     pub measured_dt: f64,
+    /// Whether bisection found an unstable dt (else `measured_dt` is the largest tried).
     pub limit_found: bool,
     /// Relative energy change over the trial at half the measured dt.
     pub energy_change_at_half: f64,
+    /// Steps per trial.
     pub steps_per_trial: u64,
 }
 
@@ -77,6 +82,7 @@ pub fn hard_scenes(dir: &Path) -> Result<Vec<(String, Scene)>, String> {
         .collect()
 }
 
+/// Bisects the largest stable dt of every scene in `scenes` under every integrator; `progress` is told what runs.
 pub fn run(
     scenes: &[(String, Scene)],
     steps: u64,
@@ -138,6 +144,7 @@ pub fn run(
     Ok(rows)
 }
 
+/// The rows as CSV, with a header.
 pub fn csv(rows: &[Row]) -> String {
     let mut s = String::from(
         "scene,integrator,theory_dt,measured_dt,limit_found,energy_change_at_half,steps_per_trial\n",
@@ -158,6 +165,7 @@ pub fn csv(rows: &[Row]) -> String {
     s
 }
 
+/// The report as markdown, with the command that made it.
 pub fn markdown(rows: &[Row], command: &str) -> String {
     let mut s = String::from("# Stability on the hard cases\n\n");
     let _ = writeln!(

@@ -10,9 +10,13 @@ use std::time::Instant;
 /// stayed finite.
 #[derive(Debug, Clone)]
 pub struct Trajectory {
+    /// Positions of every particle at each checkpoint.
     pub checkpoints: Vec<Vec<DVec2>>,
+    /// Wall time of the stepping, s.
     pub wall_s: f64,
+    /// Steps taken.
     pub steps: u64,
+    /// Whether every step stayed finite.
     pub finite: bool,
     /// Mean conjugate-gradient iterations per step (implicit Euler), else 0.
     pub cg_iterations_per_step: f64,

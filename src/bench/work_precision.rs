@@ -22,19 +22,29 @@ const CHECKPOINTS: u64 = 10;
 pub const UNSTABLE_ERROR: f64 = 1.0;
 
 #[derive(Debug, Clone, Serialize)]
+/// One run of the study: an integrator at a dt on a problem, its error and its cost.
 pub struct Row {
+    /// The problem's name.
     pub scene: String,
+    /// The integrator's CLI name.
     pub integrator: String,
+    /// Time step, s.
     pub dt: f64,
+    /// Steps to the end time.
     pub steps: u64,
+    /// Wall time, s.
     pub wall_s: f64,
+    /// Largest position error against the reference over the checkpoints, m.
     pub error: f64,
+    /// Whether the run stayed finite and bounded.
     pub stable: bool,
+    /// Mean CG iterations per step (implicit Euler; 0 otherwise).
     pub cg_iterations_per_step: f64,
 }
 
 /// A problem of the study.
 pub struct Problem {
+    /// The problem's name (`oscillator`, `cloth32`).
     pub name: &'static str,
     scene: Scene,
     t_end: f64,
@@ -48,7 +58,9 @@ enum Reference {
     Rk4(f64),
 }
 
+/// The study's results.
 pub struct Report {
+    /// Every run.
     pub rows: Vec<Row>,
     /// How each reference was obtained and how converged it is.
     pub notes: Vec<String>,
@@ -178,6 +190,7 @@ pub fn run(problems: &[Problem], mut progress: impl FnMut(&str)) -> Result<Repor
     Ok(Report { rows, notes })
 }
 
+/// The rows as CSV, with a header.
 pub fn csv(rows: &[Row]) -> String {
     let mut s =
         String::from("scene,integrator,dt,steps,wall_s,error,stable,cg_iterations_per_step\n");

@@ -6,15 +6,21 @@ use serde::{Deserialize, Serialize};
 /// A scene as written in a `.ron` file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Scene {
+    /// Gravitational acceleration (x, y), m/s².
     pub gravity: (f64, f64),
+    /// Velocity damping rate μ, 1/s (0 = off).
     pub damping: f64,
     /// Height of the ground; `None` = no ground.
     pub ground: Option<f64>,
+    /// The time integrator.
     pub integrator: Integrator,
+    /// Time step, s.
     pub dt: f64,
     #[serde(default)]
+    /// Explicit particles, indexed from 0.
     pub particles: Vec<ParticleDef>,
     #[serde(default)]
+    /// Explicit springs between them.
     pub springs: Vec<SpringDef>,
     /// Particles and springs generated from a few parameters, appended after the explicit ones
     /// (their indices continue the explicit particle list).
@@ -32,22 +38,32 @@ pub struct Scene {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// A particle as written in a scene.
 pub struct ParticleDef {
+    /// Position (x, y), m.
     pub pos: (f64, f64),
     #[serde(default)]
+    /// Velocity (x, y), m/s; default 0.
     pub vel: (f64, f64),
     #[serde(default = "default_mass")]
+    /// Mass, kg; default 1.
     pub mass: f64,
     #[serde(default)]
+    /// Pinned: never moves; default false.
     pub pinned: bool,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+/// A spring as written in a scene.
 pub struct SpringDef {
+    /// Index of one end.
     pub a: usize,
+    /// Index of the other end.
     pub b: usize,
     #[serde(default = "default_stiffness")]
+    /// Stiffness, N/m; default 1e4.
     pub stiffness: f64,
+    /// Rest length, m.
     pub rest: f64,
 }
 
@@ -59,31 +75,46 @@ pub enum Generator {
     /// (r, c) in this order: right, down and, with `shear`, (r,c)-(r+1,c+1) and (r,c+1)-(r+1,c);
     /// rest = initial distance.
     Grid {
+        /// Particles per row.
         cols: usize,
+        /// Rows.
         rows: usize,
+        /// Lower-left corner (x, y), m.
         min: (f64, f64),
+        /// Upper-right corner (x, y), m.
         max: (f64, f64),
         #[serde(default = "default_mass")]
+        /// Mass of each particle, kg.
         mass: f64,
         #[serde(default = "default_stiffness")]
+        /// Stiffness of each spring, N/m.
         stiffness: f64,
         #[serde(default = "default_true")]
+        /// Add both shear diagonals.
         shear: bool,
         #[serde(default)]
+        /// Which particles are pinned.
         pin: Pin,
         #[serde(default)]
+        /// Initial velocity of every free particle (x, y), m/s.
         vel: (f64, f64),
     },
     /// `segments` springs in a straight line from `from` to `to` (segments + 1 particles).
     Chain {
+        /// First particle (x, y), m.
         from: (f64, f64),
+        /// Last particle (x, y), m.
         to: (f64, f64),
+        /// Springs along the chain.
         segments: usize,
         #[serde(default = "default_mass")]
+        /// Mass of each particle, kg.
         mass: f64,
         #[serde(default = "default_stiffness")]
+        /// Stiffness of each spring, N/m.
         stiffness: f64,
         #[serde(default)]
+        /// Which particles are pinned.
         pin: Pin,
     },
 }
@@ -92,6 +123,7 @@ pub enum Generator {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum Pin {
     #[default]
+    /// Nothing pinned.
     None,
     /// A grid's top row; a chain's first particle.
     First,
@@ -103,10 +135,13 @@ pub enum Pin {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ClickRules {
     #[serde(default = "default_radius")]
+    /// Join every particle within this distance, m; default 0.15.
     pub radius: f64,
     #[serde(default = "default_stiffness")]
+    /// Stiffness of the new springs, N/m.
     pub stiffness: f64,
     #[serde(default = "default_mass")]
+    /// Mass of the new particle, kg.
     pub mass: f64,
     /// Pin the particle when it is the scene's first.
     #[serde(default)]

@@ -6,7 +6,9 @@ use bevy::math::DVec2;
 /// Particles and springs of a scene with every generator expanded.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Expanded {
+    /// Explicit then generated particles.
     pub particles: Vec<ParticleDef>,
+    /// Explicit then generated springs, by particle index.
     pub springs: Vec<SpringDef>,
 }
 

@@ -12,20 +12,29 @@ use std::path::{Path, PathBuf};
 /// Why a scene could not be loaded. Every variant names the file.
 #[derive(Debug)]
 pub enum SceneError {
+    /// The file could not be read.
     Io {
+        /// The file.
         path: PathBuf,
+        /// Why.
         error: std::io::Error,
     },
     /// The file is not valid RON for the schema.
     Parse {
+        /// The file.
         path: PathBuf,
+        /// Line of the error (1-based).
         line: usize,
+        /// Column of the error (1-based).
         col: usize,
+        /// What the parser expected.
         message: String,
     },
     /// The file parses but describes an impossible scene.
     Invalid {
+        /// The file.
         path: PathBuf,
+        /// Every problem found (up to 20, then a count).
         problems: Vec<String>,
     },
 }
@@ -60,11 +69,14 @@ impl std::error::Error for SceneError {}
 pub struct LoadedScene {
     /// Where it came from, if from a file.
     pub path: Option<PathBuf>,
+    /// The scene as written.
     pub scene: Scene,
+    /// Its particles and springs, generators expanded.
     pub expanded: Expanded,
 }
 
 impl LoadedScene {
+    /// Validates a scene built in code; `path` only names it in errors.
     pub fn from_scene(scene: Scene, path: Option<PathBuf>) -> Result<Self, SceneError> {
         let invalid = |problems| SceneError::Invalid {
             path: path.clone().unwrap_or_else(|| "<scene>".into()),
@@ -89,6 +101,7 @@ impl LoadedScene {
         Self::from_scene(scene, Some(path.to_owned()))
     }
 
+    /// Reads, parses and validates a scene file.
     pub fn read(path: &Path) -> Result<Self, SceneError> {
         let text = std::fs::read_to_string(path).map_err(|error| SceneError::Io {
             path: path.to_owned(),
@@ -97,6 +110,7 @@ impl LoadedScene {
         Self::parse(&text, path)
     }
 
+    /// The scene's name: its file stem, or `untitled`.
     pub fn name(&self) -> String {
         self.path
             .as_ref()

@@ -5,6 +5,7 @@ use super::generate::Expanded;
 
 /// Scenes larger than this are refused before anything is allocated for them.
 pub const MAX_PARTICLES: usize = 20_000_000;
+/// Scenes with more springs than this are refused before anything is allocated for them.
 pub const MAX_SPRINGS: usize = 80_000_000;
 /// At most this many problems are listed; the rest are counted.
 const MAX_LISTED: usize = 20;

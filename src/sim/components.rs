@@ -186,6 +186,12 @@ impl Default for SolverIndex {
 }
 
 /// Hands out creation serials for particles and springs (see [`CreationOrder`]).
+///
+/// ```
+/// # use hooke::sim::Serials;
+/// let mut serials = Serials::default();
+/// assert_eq!(serials.next_serial(), 1);
+/// ```
 #[derive(Resource, Debug, Default)]
 pub struct Serials {
     next: u64,

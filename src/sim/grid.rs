@@ -6,6 +6,7 @@ use bevy::math::DVec2;
 use bevy::platform::collections::HashMap;
 
 #[derive(Debug, Clone)]
+/// Items at points, hashed into square cells.
 pub struct SpatialGrid<T> {
     cell: f64,
     cells: HashMap<(i64, i64), Vec<(DVec2, T)>>,
@@ -31,6 +32,7 @@ impl<T: Copy> SpatialGrid<T> {
         )
     }
 
+    /// Adds an item at `p` (a non-finite point is left out).
     pub fn insert(&mut self, p: DVec2, item: T) {
         if p.is_finite() {
             self.cells.entry(self.key(p)).or_default().push((p, item));

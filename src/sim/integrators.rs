@@ -184,10 +184,17 @@ pub fn rk4(s: &mut Solver, dt: f64, gravity: DVec2, threads: &SolverThreads) {
 }
 
 /// Settings of the implicit Euler solve.
+///
+/// ```
+/// # use hooke::sim::CgSettings;
+/// let mut app = hooke::headless_app();
+/// *app.world_mut().resource_mut::<CgSettings>() = CgSettings { tolerance: 1e-10, max_iterations: 2000 };
+/// ```
 #[derive(bevy::prelude::Resource, Debug, Clone, Copy, PartialEq)]
 pub struct CgSettings {
     /// Stop when |r| <= tolerance · |b| (relative residual of the linear system).
     pub tolerance: f64,
+    /// Stop after this many iterations whatever the residual.
     pub max_iterations: u32,
 }
 

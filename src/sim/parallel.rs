@@ -22,6 +22,12 @@ pub const PARALLEL_MIN_SPRINGS: usize = 12_000;
 const PARTICLE_CHUNK: usize = 8192;
 
 /// The kernels' thread pool. `threads == 1` runs everything on the calling thread.
+///
+/// ```
+/// # use hooke::sim::SolverThreads;
+/// let mut app = hooke::headless_app();
+/// app.insert_resource(SolverThreads::new(1).unwrap()); // everything on the calling thread
+/// ```
 #[derive(Resource, Clone)]
 pub struct SolverThreads {
     threads: usize,
@@ -46,6 +52,7 @@ impl Default for SolverThreads {
 }
 
 impl SolverThreads {
+    /// A pool of `threads` solver threads (1: no pool, everything on the calling thread).
     pub fn new(threads: usize) -> Result<Self, String> {
         if threads == 0 {
             return Err("the thread count must be at least 1".into());
@@ -63,6 +70,7 @@ impl SolverThreads {
         Ok(SolverThreads { threads, pool })
     }
 
+    /// How many threads the passes use.
     pub fn threads(&self) -> usize {
         self.threads
     }
@@ -85,7 +93,7 @@ impl SolverThreads {
             .filter(|_| springs >= PARALLEL_MIN_SPRINGS)
     }
 
-    /// Runs `pass` over `data` (particle arrays of equal length, see [`Split`]), in chunks on
+    /// Runs `pass` over `data` (particle arrays of equal length, see `Split`), in chunks on
     /// the pool when a scene of `springs` springs is worth sharing, and combines the chunks'
     /// results with `join`; else runs it once over everything.
     pub fn chunked<S: Split, R: Send>(

@@ -24,6 +24,7 @@ pub enum Integrator {
 }
 
 impl Integrator {
+    /// Every integrator, in the order of the README's table.
     pub const ALL: [Integrator; 5] = [
         Integrator::ExplicitEuler,
         Integrator::SymplecticEuler,
@@ -51,6 +52,16 @@ impl std::fmt::Display for Integrator {
 }
 
 /// What the simulation does each step. Defaults are the assignment's.
+///
+/// ```
+/// # use hooke::sim::{Integrator, SimParams};
+/// let mut app = hooke::headless_app();
+/// let mut params = app.world_mut().resource_mut::<SimParams>();
+/// params.integrator = Integrator::VelocityVerlet;
+/// params.damping = 0.0;
+/// params.stiffness_override = Some(5e4); // every spring, until set back to None
+/// params.paused = false;
+/// ```
 #[derive(Resource, Debug, Clone, PartialEq)]
 pub struct SimParams {
     /// Gravitational acceleration, m/s².
@@ -59,9 +70,11 @@ pub struct SimParams {
     pub damping: f64,
     /// Height of the ground; `None` = no ground.
     pub ground: Option<f64>,
+    /// The time integrator.
     pub integrator: Integrator,
     /// Time step, s.
     pub dt: f64,
+    /// While set, no step runs (the app's G key).
     pub paused: bool,
     /// While set, every spring uses this stiffness instead of its own (the stiffness slider and
     /// `--stiffness`). Clearing it restores each spring's own stiffness.
@@ -92,41 +105,83 @@ pub const DEFAULT_STIFFNESS: f64 = 1e4;
 pub const DEFAULT_MASS: f64 = 1.0;
 
 /// Simulated time and the number of steps taken since the scene was loaded.
+///
+/// ```
+/// # use hooke::sim::{SimClock, advance};
+/// let mut app = hooke::headless_app();
+/// advance(app.world_mut(), 10);
+/// let clock = *app.world().resource::<SimClock>();
+/// assert_eq!(clock.steps, 10);
+/// assert!((clock.time - 10.0 * 1e-4).abs() < 1e-15);
+/// ```
 #[derive(Resource, Debug, Clone, Copy, Default, PartialEq)]
 pub struct SimClock {
+    /// Steps taken.
     pub steps: u64,
+    /// Simulated time, s.
     pub time: f64,
 }
 
 /// Whether the simulation is healthy.
+///
+/// ```
+/// # use hooke::sim::{SimParams, SimStatus, advance};
+/// let mut app = hooke::headless_app();
+/// app.world_mut().resource_mut::<SimParams>().dt = 0.0; // a bad value
+/// advance(app.world_mut(), 1);
+/// let status = *app.world().resource::<SimStatus>();
+/// assert!(matches!(status, SimStatus::InvalidInput(p) if p.field == "SimParams.dt"));
+/// ```
 #[derive(Resource, Debug, Clone, Copy, Default, PartialEq)]
 pub enum SimStatus {
     #[default]
+    /// Healthy.
     Running,
-    /// A step produced a non-finite position or velocity. The simulation paused itself;
-    /// `step` is the 1-based number of the step that did it.
-    BlewUp { step: u64, time: f64 },
+    /// A step produced a non-finite position or velocity. The simulation paused itself.
+    BlewUp {
+        /// The 1-based number of the step that did it.
+        step: u64,
+        /// Simulated time then, s.
+        time: f64,
+    },
     /// A value a user wrote is unusable (see [`crate::sim::inputs`]); paused, and the solver
     /// keeps its last good state until it is mended.
     InvalidInput(InputProblem),
     /// The total energy rose past the watch's bound (see [`crate::sim::watch`]); paused.
     EnergyGrew {
+        /// The 1-based step after which the watch stopped it.
         step: u64,
+        /// Simulated time then, s.
         time: f64,
+        /// The total energy then, J.
         energy: f64,
+        /// The bound it passed, J.
         bound: f64,
     },
 }
 
 /// How many times each pass has run since the scene was loaded: shows which systems a scene
 /// needs, and proves that the others do not run.
+///
+/// ```
+/// # use hooke::sim::PassCounts;
+/// let app = hooke::headless_app();
+/// let counts = *app.world().resource::<PassCounts>();
+/// assert_eq!(counts.damping, 0); // nothing has stepped yet
+/// ```
 #[derive(Resource, Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct PassCounts {
+    /// Gravity (the start of the force pass).
     pub gravity: u64,
+    /// Spring force passes.
     pub springs: u64,
+    /// Integrator updates.
     pub integrate: u64,
+    /// Damping passes.
     pub damping: u64,
+    /// Ground contact passes.
     pub ground: u64,
+    /// Position updates.
     pub advance: u64,
     /// Tear checks (one per tick, only while [`SimParams::tear`] is set).
     pub tear: u64,
@@ -134,9 +189,18 @@ pub struct PassCounts {
 
 /// Springs broken by tearing since the scene was loaded, and those found this tick (despawned
 /// by [`crate::sim::tear::remove_torn_springs`], after whatever wants to see them first).
+///
+/// ```
+/// # use hooke::sim::{SimParams, Tearing};
+/// let mut app = hooke::headless_app();
+/// app.world_mut().resource_mut::<SimParams>().tear = Some(0.5); // break past 150 % length
+/// assert_eq!(app.world().resource::<Tearing>().torn, 0);
+/// ```
 #[derive(Resource, Debug, Clone, Default, PartialEq)]
 pub struct Tearing {
+    /// Springs broken so far.
     pub torn: u64,
+    /// Springs found overstretched this tick, not yet removed.
     pub pending: Vec<Entity>,
 }
 

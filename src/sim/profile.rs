@@ -13,16 +13,22 @@ use std::time::Instant;
 /// Seconds of wall time spent in each pass of the step, summed over the steps run.
 #[derive(Resource, Debug, Default, Clone, Serialize, PartialEq)]
 pub struct PassTimes {
+    /// The force pass, s.
     pub forces: f64,
+    /// The integrator's update, s.
     pub integrate: f64,
+    /// Damping, s.
     pub damping: f64,
+    /// Ground contact, s.
     pub ground: f64,
+    /// The position update, s.
     pub advance: f64,
     #[serde(skip)]
     mark: Option<Instant>,
 }
 
 impl PassTimes {
+    /// All passes, s.
     pub fn total(&self) -> f64 {
         self.forces + self.integrate + self.damping + self.ground + self.advance
     }

@@ -87,8 +87,16 @@ pub enum StepSystems {
 pub type StepSet = StepSystems;
 
 /// How many steps one fixed tick runs.
+///
+/// ```
+/// # use hooke::sim::TickPlan;
+/// let mut app = hooke::headless_app();
+/// // Ticks of 1/60 s of simulated time instead of 1/120 s.
+/// app.world_mut().resource_mut::<TickPlan>().target_tick_seconds = 1.0 / 60.0;
+/// ```
 #[derive(Resource, Debug, Clone, Copy, PartialEq)]
 pub struct TickPlan {
+    /// Steps each fixed tick runs.
     pub steps_per_tick: u32,
     /// The simulated time a tick should cover in the app; `steps_per_tick` follows from it and dt.
     pub target_tick_seconds: f64,
@@ -110,8 +118,16 @@ impl Default for TickPlan {
 /// while the main thread would otherwise sit idle between frames (waiting for a slow renderer,
 /// such as a software one): time the frame takes anyway goes to the simulation. When the
 /// idle time goes, the allowance decays back to `per_frame`.
+///
+/// ```
+/// # use hooke::sim::StepBudget;
+/// # use std::time::Duration;
+/// let mut app = hooke::headless_app();
+/// app.world_mut().resource_mut::<StepBudget>().per_frame = Duration::from_millis(10);
+/// ```
 #[derive(Resource, Debug, Clone, Copy)]
 pub struct StepBudget {
+    /// The allowance a frame starts with.
     pub per_frame: Duration,
     /// The current allowance.
     pub allowance: Duration,
@@ -122,6 +138,7 @@ pub struct StepBudget {
 }
 
 impl StepBudget {
+    /// How far the allowance may grow, as a multiple of `per_frame`.
     pub const MAX_GROWTH: u32 = 4;
 
     /// Follows the idle time between the last frame's end and this frame's start:
@@ -259,10 +276,12 @@ impl Plugin for SimPlugin {
 
 // ---- run conditions: a pass whose feature the scene does not use does not run ----
 
+/// Run condition: not paused and healthy.
 pub fn simulation_running(params: Res<SimParams>, status: Res<SimStatus>) -> bool {
     !params.paused && *status == SimStatus::Running
 }
 
+/// Run condition: the scene has springs.
 pub fn scene_has_springs(solver: Res<Solver>) -> bool {
     !solver.springs.is_empty()
 }
@@ -272,10 +291,12 @@ pub fn integrator_is(which: Integrator) -> impl Fn(Res<SimParams>) -> bool + Clo
     move |params: Res<SimParams>| params.integrator == which
 }
 
+/// Run condition: damping is on (μ ≠ 0).
 pub fn damping_enabled(params: Res<SimParams>) -> bool {
     params.damping != 0.0
 }
 
+/// Run condition: the scene has a ground.
 pub fn ground_enabled(params: Res<SimParams>) -> bool {
     params.ground.is_some()
 }

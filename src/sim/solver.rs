@@ -1,8 +1,8 @@
 //! The packed solver state: the hot data of every particle and spring in dense arrays.
 //!
 //! The ECS components stay the source of truth; this is a copy laid out for the step loop
-//! (structure of arrays, dense `u32` indices), rebuilt or patched by [`crate::sim::sync`] when
-//! entities change. Kernels in [`crate::sim::kernels`] run on these slices and know nothing of Bevy.
+//! (structure of arrays, dense `u32` indices), rebuilt or patched by the crate's sync when
+//! entities change. The crate's kernels run on these slices and know nothing of Bevy.
 
 use bevy::math::DVec2;
 use bevy::prelude::*;
@@ -10,14 +10,30 @@ use bevy::prelude::*;
 /// A spring between two dense particle indices.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PackedSpring {
+    /// Dense index of one end.
     pub a: u32,
+    /// Dense index of the other end.
     pub b: u32,
+    /// Rest length, m.
     pub rest: f64,
     /// The stiffness in effect: the spring's own, or the global override.
     pub k: f64,
 }
 
-/// The packed copy of the simulation the step loop runs on (see the module docs).
+/// The packed copy of the simulation the step loop runs on (see the module docs). Read it;
+/// change the simulation through the components and resources.
+///
+/// ```
+/// # use bevy::math::DVec2;
+/// # use hooke::sim::Solver;
+/// let loaded = hooke::scene::presets::resolve("rope").unwrap();
+/// let app = hooke::running_app(&loaded).unwrap();
+/// let solver = app.world().resource::<Solver>();
+/// let lowest = solver.x().iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+/// let energy = solver.energy(DVec2::new(0.0, -9.8)).total();
+/// assert_eq!(solver.particle_count(), 16);
+/// # let _ = (lowest, energy);
+/// ```
 #[derive(Resource, Debug, Default)]
 pub struct Solver {
     /// Particle entity of each dense index, in creation order.
@@ -161,8 +177,11 @@ impl Solver {
 /// Mechanical energy in joules, by kind.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Energy {
+    /// Σ ½ m |v|², J.
     pub kinetic: f64,
+    /// −Σ m g·x, J.
     pub potential_gravity: f64,
+    /// Σ ½ k (|x_a − x_b| − L)², J.
     pub potential_springs: f64,
 }
 

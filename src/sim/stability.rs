@@ -18,6 +18,14 @@ use bevy::math::DVec2;
 use bevy::prelude::*;
 
 /// The stability picture of the current scene and settings.
+///
+/// ```
+/// # use hooke::sim::{SimParams, Solver, stability};
+/// let app = hooke::headless_app();
+/// let world = app.world();
+/// let estimate = stability::estimate(world.resource::<Solver>(), world.resource::<SimParams>());
+/// assert!(estimate.h_omega >= 0.0);
+/// ```
 #[derive(Resource, Debug, Clone, Copy, Default, PartialEq)]
 pub struct StabilityEstimate {
     /// Gershgorin upper bound on ω_max (rad/s).
@@ -61,7 +69,7 @@ pub fn omega_bound(s: &Solver) -> f64 {
 }
 
 /// λ_max(M⁻¹K) by Lanczos on the symmetric M^(−½) K M^(−½), K the spring stiffness
-/// linearised at the current state ([`stiffness`]), pinned particles held. The largest Ritz value approaches the truth from below and,
+/// linearised at the current state (the stiffness blocks), pinned particles held. The largest Ritz value approaches the truth from below and,
 /// unlike power iteration, converges in a few dozen steps even where the top of the spectrum is
 /// dense (a cloth's).
 pub fn omega_estimate(s: &Solver, steps: usize) -> f64 {

@@ -38,6 +38,12 @@ pub const KEEP_EVERY: u64 = 12;
 pub const KEPT: usize = 8;
 
 /// Present = the watch is on (the app turns it on; headless runs report energies instead).
+///
+/// ```
+/// # use hooke::sim::watch::EnergyWatch;
+/// let mut app = hooke::headless_app();
+/// app.init_resource::<EnergyWatch>(); // stop runs whose energy grows, keep states to go back to
+/// ```
 #[derive(Resource, Debug, Default, Clone)]
 pub struct EnergyWatch {
     /// Energy at the last edit, and the solver shape it was taken for.
@@ -52,10 +58,15 @@ pub struct EnergyWatch {
 /// A state to go back to: positions and velocities by particle entity.
 #[derive(Debug, Clone)]
 pub struct GoodState {
+    /// Particle entities, in the solver's order.
     pub entities: Vec<Entity>,
+    /// Their positions, m.
     pub x: Vec<DVec2>,
+    /// Their velocities, m/s.
     pub v: Vec<DVec2>,
+    /// The clock then.
     pub clock: SimClock,
+    /// The total energy then, J.
     pub energy: f64,
 }
 
@@ -78,6 +89,7 @@ impl GoodState {
 }
 
 impl EnergyWatch {
+    /// The energy past which the watch stops a run from the reference `reference`.
     pub fn bound(reference: f64) -> f64 {
         reference + GROWTH * (reference.abs() + 1.0)
     }

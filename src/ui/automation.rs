@@ -14,6 +14,7 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 #[derive(Resource, Debug, Clone, Default)]
+/// Options of a scripted run of the app (hidden command-line flags).
 pub struct AppOptions {
     /// Run even if the scene starts paused.
     pub start_running: bool,

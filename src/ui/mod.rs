@@ -28,7 +28,9 @@ pub use automation::AppOptions;
 
 /// Everything the app adds on top of [`SimPlugin`]: view, drawing, input, panel.
 pub struct AppPlugin {
+    /// The scene to open.
     pub scene: LoadedScene,
+    /// How to run (start running, screenshot, report, exit).
     pub options: AppOptions,
 }
 
