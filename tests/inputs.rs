@@ -107,6 +107,18 @@ fn bad_parameters_pause_with_their_name_and_never_panic() {
         params(|p| p.stiffness_override = Some(5000.0)),
     );
     rejects(
+        "a NaN tick",
+        "TickPlan.target_tick_seconds",
+        |w| w.resource_mut::<TickPlan>().target_tick_seconds = f64::NAN,
+        |w| w.resource_mut::<TickPlan>().target_tick_seconds = 1.0 / 120.0,
+    );
+    rejects(
+        "a negative CG tolerance",
+        "CgSettings.tolerance",
+        |w| w.resource_mut::<CgSettings>().tolerance = -1.0,
+        |w| w.resource_mut::<CgSettings>().tolerance = 1e-8,
+    );
+    rejects(
         "zero tearing strain",
         "SimParams.tear",
         params(|p| p.tear = Some(0.0)),

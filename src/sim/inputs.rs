@@ -1,13 +1,16 @@
-//! Checks, at the start of every fixed tick, what users can write: the [`SimParams`] resource
-//! and the particles' [`Mass`] and springs' [`Spring`] components (those added or changed
+//! Checks, at the start of every fixed tick, what users can write: the [`SimParams`],
+//! [`TickPlan`] and [`CgSettings`] resources and the particles' [`Mass`] and springs'
+//! [`Spring`] components (those added or changed
 //! since the last tick). A bad value pauses the simulation with
 //! [`SimStatus::InvalidInput`], which names the field and the value; until it is mended the
 //! solver is neither fed nor stepped nor written back, so the last good state stays and no NaN
 //! is drawn. Mended, the status goes back to running (still paused).
 
 use super::components::{Mass, Particle, Spring};
+use super::integrators::CgSettings;
 pub use super::params::InputProblem;
 use super::params::{SimParams, SimStatus};
+use super::schedule::TickPlan;
 use bevy::prelude::*;
 
 fn problem(field: &'static str, value: f64, rule: &'static str) -> InputProblem {
@@ -48,6 +51,26 @@ pub fn check_params(p: &SimParams) -> Option<InputProblem> {
     }
     if let Some(s) = p.tear.filter(|s| bad_positive(*s)) {
         return Some(problem("SimParams.tear", s, POSITIVE));
+    }
+    None
+}
+
+/// The first problem with the tick plan or the implicit solve's settings, if any.
+pub fn check_settings(plan: &TickPlan, cg: &CgSettings) -> Option<InputProblem> {
+    let t = plan.target_tick_seconds;
+    if !(t.is_finite() && t > 0.0) {
+        return Some(problem(
+            "TickPlan.target_tick_seconds",
+            t,
+            "must be finite and > 0",
+        ));
+    }
+    if !(cg.tolerance.is_finite() && cg.tolerance >= 0.0) {
+        return Some(problem(
+            "CgSettings.tolerance",
+            cg.tolerance,
+            "must be finite and >= 0",
+        ));
     }
     None
 }
@@ -102,9 +125,12 @@ pub fn inputs_valid(status: Res<SimStatus>) -> bool {
 
 /// Checks the inputs (see the module docs). While a problem stands, every input is checked
 /// each tick, so that mending it (or removing the entity) is seen.
+#[allow(clippy::too_many_arguments)]
 pub fn check_inputs(
     mut params: ResMut<SimParams>,
     mut status: ResMut<SimStatus>,
+    plan: Res<TickPlan>,
+    cg: Res<CgSettings>,
     changed_masses: Query<(Entity, Ref<Mass>)>,
     springs: Query<(Entity, Ref<Spring>)>,
     particles: Query<(), With<Particle>>,
@@ -112,6 +138,7 @@ pub fn check_inputs(
     let recheck_all = matches!(*status, SimStatus::InvalidInput(_));
     let is_particle = |e: Entity| particles.contains(e);
     let found = check_params(&params)
+        .or_else(|| check_settings(&plan, &cg))
         .or_else(|| {
             changed_masses
                 .iter()

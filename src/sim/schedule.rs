@@ -481,7 +481,9 @@ fn plan_tick(
     budget.frame_start = Some(now);
     // A bad dt (written by user code) is reported by the input check; the tick keeps its
     // size until it is mended.
-    if inputs::check_params(&params).is_some() {
+    if inputs::check_params(&params).is_some()
+        || !(plan.target_tick_seconds.is_finite() && plan.target_tick_seconds > 0.0)
+    {
         return;
     }
     let steps = (plan.target_tick_seconds / params.dt)
