@@ -204,3 +204,24 @@ fn a_nan_position_is_a_blow_up_not_a_panic() {
         SimStatus::BlewUp { .. }
     ));
 }
+
+/// A spring left dangling by a despawned particle is no input problem (the solver leaves it
+/// out), and does not keep a mended problem standing.
+#[test]
+fn a_dangling_spring_does_not_keep_the_simulation_paused() {
+    let mut app = rope();
+    let victim = nth::<Particle>(app.world_mut(), 7);
+    app.world_mut().despawn(victim);
+    advance(app.world_mut(), 50);
+    assert_eq!(problem(&app), None);
+    app.world_mut().resource_mut::<SimParams>().dt = 0.0;
+    advance(app.world_mut(), 1);
+    assert_eq!(problem(&app).map(|p| p.field), Some("SimParams.dt"));
+    {
+        let mut p = app.world_mut().resource_mut::<SimParams>();
+        p.dt = 1e-4;
+        p.paused = false;
+    }
+    assert_eq!(advance(app.world_mut(), 50), 50);
+    assert_eq!(*app.world().resource::<SimStatus>(), SimStatus::Running);
+}

@@ -123,32 +123,47 @@ pub fn inputs_valid(status: Res<SimStatus>) -> bool {
     !matches!(*status, SimStatus::InvalidInput(_))
 }
 
-/// Checks the inputs (see the module docs). While a problem stands, every input is checked
-/// each tick, so that mending it (or removing the entity) is seen.
+/// Checks the inputs (see the module docs): the parameters and settings every tick, masses
+/// and springs when added or changed. While a problem stands, that one is checked again every
+/// tick, so that mending it (or removing its entity) is seen; a spring left dangling by a
+/// despawned particle elsewhere is no problem (the solver leaves it out).
 #[allow(clippy::too_many_arguments)]
 pub fn check_inputs(
     mut params: ResMut<SimParams>,
     mut status: ResMut<SimStatus>,
     plan: Res<TickPlan>,
     cg: Res<CgSettings>,
-    changed_masses: Query<(Entity, Ref<Mass>)>,
+    masses: Query<(Entity, Ref<Mass>)>,
     springs: Query<(Entity, Ref<Spring>)>,
     particles: Query<(), With<Particle>>,
 ) {
-    let recheck_all = matches!(*status, SimStatus::InvalidInput(_));
     let is_particle = |e: Entity| particles.contains(e);
-    let found = check_params(&params)
+    let standing = match *status {
+        SimStatus::InvalidInput(p) => Some(p),
+        _ => None,
+    };
+    // The standing problem, if it still stands.
+    let still = standing.and_then(|p| match p.entity {
+        None => None,
+        Some(e) if p.field == "Mass" => masses.get(e).ok().and_then(|(e, m)| check_mass(e, &m)),
+        Some(e) => springs
+            .get(e)
+            .ok()
+            .and_then(|(e, s)| check_spring(e, &s, is_particle)),
+    });
+    let found = still
+        .or_else(|| check_params(&params))
         .or_else(|| check_settings(&plan, &cg))
         .or_else(|| {
-            changed_masses
+            masses
                 .iter()
-                .filter(|(_, m)| recheck_all || m.is_changed())
+                .filter(|(_, m)| m.is_changed())
                 .find_map(|(e, m)| check_mass(e, &m))
         })
         .or_else(|| {
             springs
                 .iter()
-                .filter(|(_, s)| recheck_all || s.is_changed())
+                .filter(|(_, s)| s.is_changed())
                 .find_map(|(e, s)| check_spring(e, &s, is_particle))
         });
     match found {
@@ -160,7 +175,7 @@ pub fn check_inputs(
                 params.paused = true;
             }
         }
-        None if recheck_all => *status = SimStatus::Running,
+        None if standing.is_some() => *status = SimStatus::Running,
         None => {}
     }
 }
