@@ -4,7 +4,7 @@
 use crate::sim::{SimClock, SimParams, Solver, StabilityEstimate};
 use bevy::prelude::*;
 use bevy_egui::egui;
-use egui_plot::{HLine, Legend, Line, Plot};
+use egui_plot::{HLine, Line, Plot};
 use std::collections::VecDeque;
 
 /// Simulated seconds shown.
@@ -36,6 +36,11 @@ pub fn sample(
     stability: Res<StabilityEstimate>,
     mut timeline: ResMut<Timeline>,
 ) {
+    // An empty solver is one not packed yet (a scene load, an undo): its energy is not the
+    // scene's.
+    if solver.particle_count() == 0 {
+        return;
+    }
     let t = clock.time;
     let samples = &mut timeline.samples;
     while samples.back().is_some_and(|s| s.time > t) {
@@ -57,39 +62,67 @@ pub fn sample(
     }
 }
 
-/// The two plots.
+/// The energy's colours: kinetic, gravity, springs, total.
+const COLORS: [egui::Color32; 4] = [
+    egui::Color32::from_rgb(240, 110, 90),
+    egui::Color32::from_rgb(110, 160, 240),
+    egui::Color32::from_rgb(150, 210, 120),
+    egui::Color32::from_rgb(235, 235, 235),
+];
+const LIMIT: egui::Color32 = egui::Color32::from_rgb(255, 110, 90);
+
+/// The two plots. Their keys are coloured labels above them: a legend inside a plot this
+/// narrow covers the lines.
 pub fn show(ui: &mut egui::Ui, timeline: &Timeline, stability: &StabilityEstimate) {
     let series = |f: fn(&Sample) -> f64| -> Vec<[f64; 2]> {
         timeline.samples.iter().map(|s| [s.time, f(s)]).collect()
     };
-    ui.label("Energy (J) over simulated time (s)");
+    ui.horizontal_wrapped(|ui| {
+        ui.label("Energy (J):");
+        for (name, color) in ["kinetic", "gravity", "springs", "total"]
+            .into_iter()
+            .zip(COLORS)
+        {
+            ui.colored_label(color, name);
+        }
+    });
     Plot::new("energy")
         .height(130.0)
-        .legend(Legend::default())
         .allow_scroll(false)
         .allow_drag(false)
         .allow_zoom(false)
         .show(ui, |plot| {
-            plot.line(Line::new("kinetic", series(|s| s.kinetic)));
-            plot.line(Line::new("gravity", series(|s| s.gravity)));
-            plot.line(Line::new("springs", series(|s| s.springs)));
-            plot.line(Line::new("total", series(|s| s.kinetic + s.gravity + s.springs)).width(2.0));
+            let parts: [fn(&Sample) -> f64; 4] = [
+                |s| s.kinetic,
+                |s| s.gravity,
+                |s| s.springs,
+                |s| s.kinetic + s.gravity + s.springs,
+            ];
+            for ((name, part), color) in ["kinetic", "gravity", "springs", "total"]
+                .into_iter()
+                .zip(parts)
+                .zip(COLORS)
+            {
+                plot.line(Line::new(name, series(part)).color(color));
+            }
         });
-    ui.label("h·ω_max against the limit");
+    ui.horizontal_wrapped(|ui| {
+        ui.label("Stability:");
+        ui.colored_label(COLORS[3], "h·ω_max");
+        ui.label("against");
+        ui.colored_label(LIMIT, "the limit");
+        ui.label("(simulated time, s)");
+    });
     Plot::new("stability")
         .height(90.0)
-        .legend(Legend::default())
         .include_y(0.0)
         .allow_scroll(false)
         .allow_drag(false)
         .allow_zoom(false)
         .show(ui, |plot| {
-            plot.line(Line::new("h·ω_max", series(|s| s.h_omega)));
+            plot.line(Line::new("h·ω_max", series(|s| s.h_omega)).color(COLORS[3]));
             if stability.limit.is_finite() {
-                plot.hline(
-                    HLine::new("limit", stability.limit)
-                        .color(egui::Color32::from_rgb(255, 110, 90)),
-                );
+                plot.hline(HLine::new("limit", stability.limit).color(LIMIT));
             }
         });
 }
