@@ -16,9 +16,17 @@ use bevy::prelude::*;
 fn problem(field: &'static str, value: f64, rule: &'static str) -> InputProblem {
     InputProblem {
         field,
-        value,
+        value: Some(value),
         entity: None,
         rule,
+    }
+}
+
+/// A spring end that is not what it must be.
+fn bad_end(field: &'static str, rule: &'static str) -> InputProblem {
+    InputProblem {
+        value: None,
+        ..problem(field, f64::NAN, rule)
     }
 }
 
@@ -55,15 +63,18 @@ pub fn check_params(p: &SimParams) -> Option<InputProblem> {
     None
 }
 
+/// The problem with the tick plan, if any (the tick planner checks it too, before sizing the
+/// fixed timestep from it).
+pub fn check_tick_plan(plan: &TickPlan) -> Option<InputProblem> {
+    let t = plan.target_tick_seconds;
+    (!(t.is_finite() && t > 0.0))
+        .then(|| problem("TickPlan.target_tick_seconds", t, "must be finite and > 0"))
+}
+
 /// The first problem with the tick plan or the implicit solve's settings, if any.
 pub fn check_settings(plan: &TickPlan, cg: &CgSettings) -> Option<InputProblem> {
-    let t = plan.target_tick_seconds;
-    if !(t.is_finite() && t > 0.0) {
-        return Some(problem(
-            "TickPlan.target_tick_seconds",
-            t,
-            "must be finite and > 0",
-        ));
+    if let Some(p) = check_tick_plan(plan) {
+        return Some(p);
     }
     if !(cg.tolerance.is_finite() && cg.tolerance >= 0.0) {
         return Some(problem(
@@ -104,15 +115,11 @@ fn check_spring(
         return on(problem("Spring.rest", s.rest, "must be finite and >= 0"));
     }
     if s.a == s.b {
-        return on(problem(
-            "Spring.b",
-            f64::NAN,
-            "is the same particle as Spring.a",
-        ));
+        return on(bad_end("Spring.b", "is the same particle as Spring.a"));
     }
     for (field, end) in [("Spring.a", s.a), ("Spring.b", s.b)] {
         if !is_particle(end) {
-            return on(problem(field, f64::NAN, "is not a particle"));
+            return on(bad_end(field, "is not a particle"));
         }
     }
     None
@@ -142,14 +149,14 @@ pub fn check_inputs(
         SimStatus::InvalidInput(p) => Some(p),
         _ => None,
     };
-    // The standing problem, if it still stands.
-    let still = standing.and_then(|p| match p.entity {
-        None => None,
-        Some(e) if p.field == "Mass" => masses.get(e).ok().and_then(|(e, m)| check_mass(e, &m)),
-        Some(e) => springs
-            .get(e)
-            .ok()
-            .and_then(|(e, s)| check_spring(e, &s, is_particle)),
+    // The standing problem's entity (a particle's mass or a spring), if it still has one.
+    let still = standing.and_then(|p| p.entity).and_then(|e| {
+        let mass = masses.get(e).ok().and_then(|(e, m)| check_mass(e, &m));
+        let spring = || {
+            let (e, s) = springs.get(e).ok()?;
+            check_spring(e, &s, is_particle)
+        };
+        mass.or_else(spring)
     });
     let found = still
         .or_else(|| check_params(&params))

@@ -209,8 +209,8 @@ pub struct Tearing {
 pub struct InputProblem {
     /// The field, as a user writes it (`SimParams.dt`, `Mass`, `Spring.b`, ...).
     pub field: &'static str,
-    /// Its value (for a spring end: NaN).
-    pub value: f64,
+    /// Its value; `None` for a spring end (an entity, not a number).
+    pub value: Option<f64>,
     /// The entity it belongs to, for a component.
     pub entity: Option<Entity>,
     /// What it must be.
@@ -223,8 +223,8 @@ impl std::fmt::Display for InputProblem {
         if let Some(e) = self.entity {
             write!(f, " of {e}")?;
         }
-        if !self.value.is_nan() || self.rule.contains("finite") {
-            write!(f, " = {}", self.value)?;
+        if let Some(v) = self.value {
+            write!(f, " = {v}")?;
         }
         write!(f, ": {}", self.rule)
     }

@@ -481,9 +481,7 @@ fn plan_tick(
     budget.frame_start = Some(now);
     // A bad dt (written by user code) is reported by the input check; the tick keeps its
     // size until it is mended.
-    if inputs::check_params(&params).is_some()
-        || !(plan.target_tick_seconds.is_finite() && plan.target_tick_seconds > 0.0)
-    {
+    if inputs::check_params(&params).is_some() || inputs::check_tick_plan(&plan).is_some() {
         return;
     }
     let steps = (plan.target_tick_seconds / params.dt)
