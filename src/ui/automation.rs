@@ -6,7 +6,7 @@ use super::history::History;
 use super::pointer::Attraction;
 use super::stats::LiveStats;
 use super::view::CanvasView;
-use crate::sim::{SimClock, SimParams, Solver, Tearing};
+use crate::sim::{Particle, Pinned, SimClock, SimParams, Solver, Tearing};
 use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
 use bevy::render::view::screenshot::{Screenshot, save_to_disk};
@@ -35,11 +35,12 @@ pub struct DriveState {
 
 /// What the status report reads besides the simulation.
 #[derive(SystemParam)]
-pub struct AppState<'w> {
+pub struct AppState<'w, 's> {
     history: Res<'w, History>,
     help: Res<'w, HelpOverlay>,
     tearing: Res<'w, Tearing>,
     attraction: Res<'w, Attraction>,
+    pinned: Query<'w, 's, (), (With<Particle>, With<Pinned>)>,
 }
 
 /// Scenes up to this many particles list their positions in the status report.
@@ -84,7 +85,7 @@ pub fn drive(
             "fps": stats.fps,
             "real_time_factor": stats.real_time_factor,
             "elapsed": elapsed,
-            "pinned": solver.inv_mass.iter().filter(|w| **w == 0.0).count() - solver.kinematic,
+            "pinned": app.pinned.iter().len(),
             "held": solver.kinematic,
             "springs_torn": app.tearing.torn,
             "tear": params.tear,

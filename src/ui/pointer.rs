@@ -78,9 +78,7 @@ impl Cursor<'_, '_> {
     /// The world point where the left button went down this frame, when that was on the
     /// canvas and free.
     pub fn left_press(&self) -> Option<DVec2> {
-        let p = self.pressed.left.or(self.window.cursor_position())?;
-        (self.view.on_canvas(p) && !self.egui.wants_any_pointer_input())
-            .then(|| self.view.window_to_world(p))
+        self.free(self.pressed.left.or(self.window.cursor_position())?)
     }
 
     pub fn world(&self) -> Option<DVec2> {
@@ -90,8 +88,13 @@ impl Cursor<'_, '_> {
 
     /// The world point under the cursor, when the cursor is on the canvas and free.
     pub fn on_canvas(&self) -> Option<DVec2> {
-        let p = self.window.cursor_position()?;
-        (self.view.on_canvas(p) && !self.egui.wants_any_pointer_input())
+        self.free(self.window.cursor_position()?)
+    }
+
+    /// The world point of window point `p`, when it is free for a gesture.
+    fn free(&self, p: Vec2) -> Option<DVec2> {
+        self.view
+            .free_for_gesture(p, &self.egui)
             .then(|| self.view.window_to_world(p))
     }
 

@@ -65,6 +65,12 @@ impl CanvasView {
         p.x > self.panel_width
     }
 
+    /// May a gesture start at this window point: on the canvas, and not over a window of
+    /// egui's (the help overlay)?
+    pub fn free_for_gesture(&self, p: Vec2, egui: &EguiWantsInput) -> bool {
+        self.on_canvas(p) && !egui.wants_any_pointer_input()
+    }
+
     /// Metres per logical pixel.
     pub fn pixel(&self) -> f64 {
         1.0 / self.scale as f64
@@ -147,8 +153,8 @@ pub fn zoom_and_pan(
     mut view: ResMut<CanvasView>,
     mut panning: Local<bool>,
 ) {
-    let panel = view.panel_width;
-    let free = |p: Vec2| !egui.wants_any_pointer_input() && p.x > panel;
+    let layout = *view;
+    let free = |p: Vec2| layout.free_for_gesture(p, &egui);
     if let Some(cursor) = window.cursor_position()
         && scroll.delta.y != 0.0
         && free(cursor)
