@@ -291,7 +291,7 @@ pub fn side_panel(
             ui.separator();
 
             // Live figures
-            let energy = solver.energy(p.gravity);
+            let energy = timeline.energy;
             egui::Grid::new("figures").num_columns(2).show(ui, |ui| {
                 let mut row = |name: &str, value: String| {
                     ui.label(name);

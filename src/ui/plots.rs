@@ -1,7 +1,7 @@
 //! The panel's plots: the energy over the last [`WINDOW`] seconds of simulated time, by kind,
 //! and h·ω_max against the integrator's stability limit.
 
-use crate::sim::{SimClock, SimParams, Solver, StabilityEstimate};
+use crate::sim::{Energy, SimClock, SimParams, Solver, StabilityEstimate};
 use bevy::prelude::*;
 use bevy_egui::egui;
 use egui_plot::{HLine, Line, Plot};
@@ -21,14 +21,17 @@ struct Sample {
     h_omega: f64,
 }
 
-/// Samples of the last [`WINDOW`] seconds.
+/// Samples of the last [`WINDOW`] seconds, and the energy now.
 #[derive(Resource, Debug, Default)]
 pub struct Timeline {
     samples: VecDeque<Sample>,
+    /// The energy of the solver's state now (the panel's figures read it too), computed once
+    /// a frame, and only when the solver or the parameters changed.
+    pub energy: Energy,
 }
 
-/// Samples the energy and h·ω_max once the clock has moved on by 1/[`RATE`] s; a clock that
-/// went back (reset, undo, restore) drops the samples after it.
+/// Updates the energy, and samples it with h·ω_max once the clock has moved on by
+/// 1/[`RATE`] s; a clock that went back (reset, undo, restore) drops the samples after it.
 pub fn sample(
     clock: Res<SimClock>,
     solver: Res<Solver>,
@@ -36,12 +39,16 @@ pub fn sample(
     stability: Res<StabilityEstimate>,
     mut timeline: ResMut<Timeline>,
 ) {
+    if solver.is_changed() || params.is_changed() {
+        timeline.energy = solver.energy(params.gravity);
+    }
     // An empty solver is one not packed yet (a scene load, an undo): its energy is not the
     // scene's.
     if solver.particle_count() == 0 {
         return;
     }
     let t = clock.time;
+    let e = timeline.energy;
     let samples = &mut timeline.samples;
     while samples.back().is_some_and(|s| s.time > t) {
         samples.pop_back();
@@ -49,7 +56,6 @@ pub fn sample(
     if samples.back().is_some_and(|s| t - s.time < 1.0 / RATE) {
         return;
     }
-    let e = solver.energy(params.gravity);
     samples.push_back(Sample {
         time: t,
         kinetic: e.kinetic,
