@@ -18,27 +18,6 @@ fn oscillator(integrator: Integrator, dt: f64) -> Scene {
     scene
 }
 
-/// A small 2D network under gravity: a pinned particle and three free ones of different
-/// masses, six springs, released from a perturbed shape.
-fn network(integrator: Integrator, dt: f64) -> Scene {
-    let mut scene = bare_scene(integrator, dt);
-    scene.gravity = (0.0, -9.8);
-    let mut p = vec![
-        particle(0.5, 0.9, true),
-        particle(0.4, 0.7, false),
-        particle(0.62, 0.72, false),
-        particle(0.5, 0.5, false),
-    ];
-    p[2].mass = 2.0;
-    p[3].mass = 0.5;
-    scene.particles = p;
-    scene.springs = [(0, 1), (0, 2), (1, 2), (1, 3), (2, 3), (0, 3)]
-        .iter()
-        .map(|&(a, b)| spring(a, b, 200.0, 0.2))
-        .collect();
-    scene
-}
-
 /// Positions and velocities at the checkpoints t = j T / CHECKPOINTS.
 fn trajectory(scene: Scene) -> Vec<(Vec<DVec2>, Vec<DVec2>)> {
     let steps = (T / scene.dt).round() as u64;

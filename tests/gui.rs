@@ -99,19 +99,6 @@ fn hooke_window(display: &str) -> String {
         .to_string()
 }
 
-/// Window coordinates of a world point, from the mapping the app reports.
-fn to_window(view: &serde_json::Value, x: f64, y: f64) -> (i64, i64) {
-    let scale = view["scale"].as_f64().unwrap();
-    let (cx, cy) = (
-        view["center"][0].as_f64().unwrap(),
-        view["center"][1].as_f64().unwrap(),
-    );
-    (
-        (cx + (x - 0.5) * scale).round() as i64,
-        (cy - (y - 0.5) * scale).round() as i64,
-    )
-}
-
 fn pixel(png: &Path, x: i64, y: i64) -> (u8, u8, u8) {
     let out = Command::new("convert")
         .arg(png)
@@ -223,7 +210,7 @@ fn app_starts_draws_and_accepts_clicks() {
     let view = s["view"].clone();
     let clicks = [(0.5, 0.8), (0.6, 0.8), (0.55, 0.7)];
     for (i, &(x, y)) in clicks.iter().enumerate() {
-        let (wx, wy) = to_window(&view, x, y);
+        let (wx, wy) = world_to_window(&view, x, y);
         xdotool(
             &display,
             &[
@@ -275,7 +262,7 @@ fn app_starts_draws_and_accepts_clicks() {
         .map(|(x, y)| (x.parse::<i64>().unwrap(), y.parse::<i64>().unwrap()))
         .unwrap_or((0, 0));
     for &(x, y) in &clicks[1..] {
-        let (wx, wy) = to_window(&view, x, y);
+        let (wx, wy) = world_to_window(&view, x, y);
         let (r, g, b) = pixel(&shot, ox + wx, oy + wy);
         assert!(
             r > 180 && g > 180 && b > 180,
@@ -307,7 +294,7 @@ fn app_starts_draws_and_accepts_clicks() {
     );
     // Orange (255,191,51) around the pinned end, partly under the spring's red line (217,51,51);
     // without the dot only red and the near-black background are there.
-    let (wx, wy) = to_window(&view, 0.3, 0.9);
+    let (wx, wy) = world_to_window(&view, 0.3, 0.9);
     let around = pixels_around(&shot, wx, wy, 4);
     let orange = around
         .iter()
@@ -424,23 +411,29 @@ impl Session {
     }
 }
 
+/// The window-to-world mapping the app reports: (scale, center, world_center).
+fn mapping(view: &serde_json::Value) -> (f64, (f64, f64), (f64, f64)) {
+    let f = |v: &serde_json::Value| v.as_f64().unwrap();
+    let pair = |v: &serde_json::Value| (f(&v[0]), f(&v[1]));
+    (
+        f(&view["scale"]),
+        pair(&view["center"]),
+        pair(&view["world_center"]),
+    )
+}
+
 /// Window coordinates of a world point: center + (world − world_center) · scale, y flipped.
 fn world_to_window(view: &serde_json::Value, x: f64, y: f64) -> (i64, i64) {
-    let f = |v: &serde_json::Value| v.as_f64().unwrap();
-    let scale = f(&view["scale"]);
-    let (cx, cy) = (f(&view["center"][0]), f(&view["center"][1]));
-    let (wx, wy) = (f(&view["world_center"][0]), f(&view["world_center"][1]));
+    let (scale, (cx, cy), (wx, wy)) = mapping(view);
     (
         (cx + (x - wx) * scale).round() as i64,
         (cy - (y - wy) * scale).round() as i64,
     )
 }
 
+/// The world point of a window point (the inverse of [`world_to_window`], unrounded).
 fn window_to_world(view: &serde_json::Value, px: f64, py: f64) -> (f64, f64) {
-    let f = |v: &serde_json::Value| v.as_f64().unwrap();
-    let scale = f(&view["scale"]);
-    let (cx, cy) = (f(&view["center"][0]), f(&view["center"][1]));
-    let (wx, wy) = (f(&view["world_center"][0]), f(&view["world_center"][1]));
+    let (scale, (cx, cy), (wx, wy)) = mapping(view);
     (wx + (px - cx) / scale, wy - (py - cy) / scale)
 }
 

@@ -10,23 +10,10 @@ use hooke::scene::{LoadedScene, load_into_world, presets, snapshot, to_ron};
 use hooke::sim::watch::{EnergyWatch, restore_last_good_state};
 use hooke::sim::*;
 
-/// A small network under gravity: a pinned particle and three free ones of different masses.
-fn network(integrator: Integrator, dt: f64, gravity: (f64, f64)) -> hooke::scene::Scene {
-    let mut scene = bare_scene(integrator, dt);
+/// The shared test network (tests/common) under gravity `gravity`.
+fn network_under(integrator: Integrator, dt: f64, gravity: (f64, f64)) -> hooke::scene::Scene {
+    let mut scene = network(integrator, dt);
     scene.gravity = gravity;
-    scene.particles = vec![
-        particle(0.5, 0.9, true),
-        particle(0.4, 0.7, false),
-        particle(0.62, 0.72, false),
-        particle(0.5, 0.5, false),
-    ];
-    scene.particles[2].mass = 2.5;
-    scene.particles[3].mass = 0.4;
-    for (a, b) in [(0, 1), (0, 2), (1, 2), (1, 3), (2, 3), (0, 3)] {
-        let (pa, pb) = (scene.particles[a].pos, scene.particles[b].pos);
-        let rest = DVec2::from(pa).distance(DVec2::from(pb)) * 0.9;
-        scene.springs.push(spring(a, b, 500.0, rest));
-    }
     scene
 }
 
@@ -42,8 +29,8 @@ fn an_external_force_enters_every_stage_of_every_integrator() {
     let a = DVec2::new(3.0, -7.0);
     for integrator in Integrator::ALL {
         let dt = 2e-3;
-        let mut by_gravity = app_with(network(integrator, dt, (a.x, a.y)));
-        let mut by_force = app_with(network(integrator, dt, (0.0, 0.0)));
+        let mut by_gravity = app_with(network_under(integrator, dt, (a.x, a.y)));
+        let mut by_force = app_with(network_under(integrator, dt, (0.0, 0.0)));
         let masses = solver(&by_force).mass().to_vec();
         for (e, m) in particles_in_order(&mut by_force).into_iter().zip(masses) {
             by_force
@@ -71,7 +58,11 @@ fn an_external_force_enters_every_stage_of_every_integrator() {
 /// Clearing the external forces switches the extra work off again.
 #[test]
 fn zero_external_forces_cost_nothing() {
-    let mut app = app_with(network(Integrator::SymplecticEuler, 1e-4, (0.0, -9.8)));
+    let mut app = app_with(network_under(
+        Integrator::SymplecticEuler,
+        1e-4,
+        (0.0, -9.8),
+    ));
     let e = particles_in_order(&mut app)[1];
     app.world_mut()
         .entity_mut(e)
@@ -90,7 +81,7 @@ fn zero_external_forces_cost_nothing() {
 #[test]
 fn a_kinematic_particle_moves_with_its_velocity_and_is_released_with_it() {
     for integrator in Integrator::ALL {
-        let mut app = app_with(network(integrator, 1e-3, (0.0, -9.8)));
+        let mut app = app_with(network_under(integrator, 1e-3, (0.0, -9.8)));
         let e = particles_in_order(&mut app)[3];
         let v = DVec2::new(0.4, 0.1);
         app.world_mut()
@@ -108,7 +99,7 @@ fn a_kinematic_particle_moves_with_its_velocity_and_is_released_with_it() {
         app.world_mut().entity_mut(e).remove::<Kinematic>();
         step(&mut app, 1);
         assert_eq!(solver(&app).kinematic(), 0);
-        // One step of forces (springs of 500 N/m on 0.4 kg, dt = 1e-3) changes it by < 1 m/s.
+        // One step of forces (springs of 200 N/m on 0.5 kg, dt = 1e-3) changes it by < 1 m/s.
         assert!(
             vel(&app, 3).distance(v) < 1.0,
             "{integrator}: released with about its velocity, got {}",

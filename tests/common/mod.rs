@@ -36,6 +36,27 @@ pub fn spring(a: usize, b: usize, stiffness: f64, rest: f64) -> SpringDef {
     }
 }
 
+/// A small 2D network under gravity: a pinned particle and three free ones of different
+/// masses, six springs, released from a perturbed shape.
+pub fn network(integrator: Integrator, dt: f64) -> Scene {
+    let mut scene = bare_scene(integrator, dt);
+    scene.gravity = (0.0, -9.8);
+    let mut p = vec![
+        particle(0.5, 0.9, true),
+        particle(0.4, 0.7, false),
+        particle(0.62, 0.72, false),
+        particle(0.5, 0.5, false),
+    ];
+    p[2].mass = 2.0;
+    p[3].mass = 0.5;
+    scene.particles = p;
+    scene.springs = [(0, 1), (0, 2), (1, 2), (1, 3), (2, 3), (0, 3)]
+        .iter()
+        .map(|&(a, b)| spring(a, b, 200.0, 0.2))
+        .collect();
+    scene
+}
+
 /// A headless app (MinimalPlugins + SimPlugin) with the scene loaded and running.
 pub fn app_with(scene: Scene) -> App {
     let loaded = LoadedScene::from_scene(scene, None).expect("test scene is valid");
