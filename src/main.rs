@@ -117,6 +117,18 @@ struct RunArgs {
     /// Tearing: break springs stretched past (1 + STRAIN) × rest (overrides the scene's).
     #[arg(long, value_name = "STRAIN")]
     tear: Option<f64>,
+    /// Implicit Euler: Newton steps per step (default 1, the classic linearised step).
+    #[arg(long, value_name = "N")]
+    newton_iterations: Option<u32>,
+    /// Projective dynamics: local/global iterations per step (default 10).
+    #[arg(long, value_name = "N")]
+    pd_iterations: Option<u32>,
+    /// XPBD: substeps per step (default 10).
+    #[arg(long, value_name = "N")]
+    xpbd_substeps: Option<u32>,
+    /// XPBD: constraint sweeps per substep (default 1).
+    #[arg(long, value_name = "N")]
+    xpbd_iterations: Option<u32>,
     /// Solver threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
@@ -177,6 +189,10 @@ fn run(args: RunArgs) -> ExitCode {
         stiffness: args.stiffness,
         damping: args.damping,
         tear: args.tear,
+        newton_iterations: args.newton_iterations,
+        pd_iterations: args.pd_iterations,
+        xpbd_substeps: args.xpbd_substeps,
+        xpbd_iterations: args.xpbd_iterations,
         threads: args.threads,
         profile: args.profile,
     };

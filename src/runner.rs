@@ -29,6 +29,14 @@ pub struct Overrides {
     pub damping: Option<f64>,
     /// Tearing strain (overrides the scene's `tear`).
     pub tear: Option<f64>,
+    /// Implicit Euler's Newton steps per step (overrides the scene's).
+    pub newton_iterations: Option<u32>,
+    /// Projective dynamics' local/global iterations per step (overrides the scene's).
+    pub pd_iterations: Option<u32>,
+    /// XPBD's substeps per step (overrides the scene's).
+    pub xpbd_substeps: Option<u32>,
+    /// XPBD's constraint sweeps per substep (overrides the scene's).
+    pub xpbd_iterations: Option<u32>,
     /// Solver threads (default: all cores).
     pub threads: Option<usize>,
     /// Time each pass of the step (the report's `pass_seconds`).
@@ -49,6 +57,17 @@ impl Overrides {
         }
         if let Some(s) = self.tear.filter(|s| !(s.is_finite() && *s > 0.0)) {
             return Err(format!("--tear must be finite and > 0, got {s}"));
+        }
+        let counts = [
+            ("--newton-iterations", self.newton_iterations),
+            ("--pd-iterations", self.pd_iterations),
+            ("--xpbd-substeps", self.xpbd_substeps),
+            ("--xpbd-iterations", self.xpbd_iterations),
+        ];
+        for (flag, n) in counts {
+            if let Some(n) = n.filter(|n| !(1..=sim::Iterations::MAX).contains(n)) {
+                return Err(format!("{flag} {}, got {n}", sim::Iterations::RULE));
+            }
         }
         if self.threads == Some(0) {
             return Err("--threads must be at least 1".into());
@@ -101,6 +120,11 @@ pub struct RunReport {
     /// Mean conjugate-gradient iterations per step (implicit Euler only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub cg_iterations_per_step: Option<f64>,
+    /// The iteration counts in effect.
+    pub iterations: sim::Iterations,
+    /// What the iterative methods did: Newton steps, projective dynamics' iterations and
+    /// factorisations (count, wall time, factor size), XPBD's sweeps and colours.
+    pub solve: sim::SolveStats,
     /// Wall time per pass, summed over the run (`--profile` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pass_seconds: Option<sim::PassTimes>,
@@ -171,6 +195,17 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
         if overrides.tear.is_some() {
             p.tear = overrides.tear;
         }
+        let it = &mut p.iterations;
+        for (field, value) in [
+            (&mut it.newton, overrides.newton_iterations),
+            (&mut it.projective, overrides.pd_iterations),
+            (&mut it.xpbd_substeps, overrides.xpbd_substeps),
+            (&mut it.xpbd_sweeps, overrides.xpbd_iterations),
+        ] {
+            if let Some(v) = value {
+                *field = v;
+            }
+        }
     }
     let params = world.resource::<SimParams>().clone();
     let steps = match duration {
@@ -228,6 +263,8 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
         finite: blowup_step.is_none() && solver.state_is_finite(),
         springs_torn: world.resource::<sim::Tearing>().torn,
         cg_iterations_per_step: solver.scratch.cg_iterations_per_step(),
+        iterations: params.iterations,
+        solve: solver.solve_stats(),
         pass_seconds: world.get_resource::<sim::PassTimes>().cloned(),
         blowup_step,
     };

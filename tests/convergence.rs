@@ -75,13 +75,23 @@ fn dts(integrator: Integrator, omega: f64) -> Vec<f64> {
         Integrator::VelocityVerlet => 1e-2,
         Integrator::Rk4 if stiff => 2e-3,
         Integrator::Rk4 => 2e-2,
+        // Backward Euler's objective, minimised by 10 iterations: implicit Euler's range.
+        Integrator::ProjectiveDynamics if stiff => 1e-4,
+        Integrator::ProjectiveDynamics => 1e-3,
+        // Ten substeps: the range of a ten times smaller step.
+        Integrator::Xpbd if stiff => 1e-3,
+        Integrator::Xpbd => 1e-2,
     };
     (0..4).map(|i| start / f64::powi(2.0, i)).collect()
 }
 
 fn expected_order(integrator: Integrator) -> f64 {
     match integrator {
-        Integrator::ExplicitEuler | Integrator::SymplecticEuler | Integrator::ImplicitEuler => 1.0,
+        Integrator::ExplicitEuler
+        | Integrator::SymplecticEuler
+        | Integrator::ImplicitEuler
+        | Integrator::ProjectiveDynamics
+        | Integrator::Xpbd => 1.0,
         Integrator::VelocityVerlet => 2.0,
         Integrator::Rk4 => 4.0,
     }

@@ -153,8 +153,15 @@ fn a_long_pinned_chain_sags_to_its_exact_static_shape() {
             worst = worst.max((p.y - y).abs()).max((p.x - 0.5).abs());
         }
         println!("{integrator}: largest distance from the static shape {worst:.2e} m");
+        // XPBD at its default one sweep per substep is soft (tests/large_steps.rs): here it
+        // settles 2.8e-5 m (0.1 % of the sag) too low.
+        let tolerance = if integrator == Integrator::Xpbd {
+            5e-5
+        } else {
+            1e-8
+        };
         assert!(
-            worst < 1e-8,
+            worst < tolerance,
             "{integrator}: {worst:e} m from the static shape"
         );
     }
@@ -210,7 +217,7 @@ fn a_fast_impact_never_tunnels_deeper_than_one_step() {
 }
 
 #[test]
-fn at_a_large_step_implicit_euler_stays_stable_and_reaches_the_static_shape() {
+fn at_a_large_step_the_implicit_methods_stay_stable_and_reach_the_static_shape() {
     let scene = hard("large_dt");
     let (n, m, k, g) = (10usize, 1.0, 1e4, 9.8);
     for integrator in Integrator::ALL {
@@ -221,13 +228,20 @@ fn at_a_large_step_implicit_euler_stays_stable_and_reaches_the_static_shape() {
             600,
         );
         println!("{integrator}: h·ω/limit {:.2}, {:?}", o.margin, o.status);
-        if integrator == Integrator::ImplicitEuler {
+        if integrator.unconditionally_stable() {
             assert_eq!(o.status, SimStatus::Running);
             let x = &solver(&app).x();
             let extension = x[0].y - x[n].y - 0.5;
             let expected = m * g * (n * (n + 1)) as f64 / (2.0 * k);
+            println!("{integrator}: extension {extension:e}, expected {expected:e}");
+            // XPBD's one sweep per substep: 2.5 % soft at 10 substeps (tests/large_steps.rs).
+            let tolerance = if integrator == Integrator::Xpbd {
+                3e-2
+            } else {
+                1e-6
+            };
             assert!(
-                (extension - expected).abs() < 1e-6 * expected,
+                (extension - expected).abs() < tolerance * expected,
                 "{extension} vs {expected}"
             );
         } else {

@@ -61,6 +61,8 @@ fn cost(i: Integrator) -> f64 {
         Integrator::VelocityVerlet => 2.0,
         Integrator::Rk4 => 4.0,
         Integrator::ImplicitEuler => 6.0,
+        Integrator::ProjectiveDynamics => 4.0,
+        Integrator::Xpbd => 10.0,
     }
 }
 

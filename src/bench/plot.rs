@@ -15,6 +15,8 @@ fn colour(i: Integrator) -> RGBColor {
         Integrator::VelocityVerlet => RGBColor(44, 160, 44),
         Integrator::Rk4 => RGBColor(148, 103, 189),
         Integrator::ImplicitEuler => RGBColor(255, 127, 14),
+        Integrator::ProjectiveDynamics => RGBColor(23, 190, 207),
+        Integrator::Xpbd => RGBColor(140, 86, 75),
     }
 }
 

@@ -35,6 +35,15 @@ pub struct Scene {
     /// Tearing: `Some(strain)` breaks a spring stretched past (1 + strain) × rest.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tear: Option<f64>,
+    /// Iteration counts of the iterative integrators (Newton steps, projective dynamics'
+    /// iterations, XPBD's substeps and sweeps); any left out keep their defaults:
+    /// `iterations: (projective: 20)`.
+    #[serde(default, skip_serializing_if = "is_default_iterations")]
+    pub iterations: crate::sim::Iterations,
+}
+
+fn is_default_iterations(i: &crate::sim::Iterations) -> bool {
+    *i == crate::sim::Iterations::default()
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -188,6 +197,7 @@ impl Default for Scene {
             click: None,
             start_paused: false,
             tear: p.tear,
+            iterations: p.iterations,
         }
     }
 }

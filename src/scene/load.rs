@@ -137,6 +137,7 @@ pub fn load_into_world(world: &mut World, loaded: &LoadedScene) {
         paused: s.start_paused,
         stiffness_override: None,
         tear: s.tear,
+        iterations: s.iterations,
     };
     replace_contents(world, params, &loaded.expanded);
     world.insert_resource(SimClock::default());
@@ -214,6 +215,7 @@ pub fn snapshot(world: &mut World) -> Scene {
         click,
         start_paused: false,
         tear: params.tear,
+        iterations: params.iterations,
     }
 }
 

@@ -33,6 +33,11 @@ pub fn validate(scene: &Scene) -> Result<Expanded, Vec<String>> {
     if let Some(s) = scene.tear.filter(|s| !(s.is_finite() && *s > 0.0)) {
         p.push(format!("tear: the strain must be finite and > 0, got {s}"));
     }
+    if let Some((field, v)) = scene.iterations.out_of_range() {
+        use crate::sim::Iterations;
+        let (name, rule) = (Iterations::NAMES[field], Iterations::RULE);
+        p.push(format!("iterations.{name}: {rule}, got {v}"));
+    }
     if let Some(c) = &scene.click {
         if !(c.radius.is_finite() && c.radius >= 0.0) {
             p.push(format!(

@@ -9,7 +9,7 @@
 use super::components::{Mass, Particle, Spring};
 use super::integrators::CgSettings;
 pub use super::params::InputProblem;
-use super::params::{SimParams, SimStatus};
+use super::params::{Iterations, SimParams, SimStatus};
 use super::schedule::TickPlan;
 use bevy::prelude::*;
 
@@ -59,6 +59,10 @@ pub fn check_params(p: &SimParams) -> Option<InputProblem> {
     }
     if let Some(s) = p.tear.filter(|s| bad_positive(*s)) {
         return Some(problem("SimParams.tear", s, POSITIVE));
+    }
+    if let Some((field, v)) = p.iterations.out_of_range() {
+        let field = Iterations::PARAM_FIELDS[field];
+        return Some(problem(field, v as f64, Iterations::RULE));
     }
     None
 }

@@ -34,12 +34,20 @@ pub struct Scratch {
     sum_a: Vec<DVec2>,
     stage_v: Vec<DVec2>,
     cg: Cg,
+    /// Implicit Euler's Newton steps so far, and its time steps.
+    newton_steps: u64,
+    newton_solves: u64,
 }
 
 impl Scratch {
     /// Mean conjugate-gradient iterations per implicit Euler step so far, if any were taken.
     pub fn cg_iterations_per_step(&self) -> Option<f64> {
-        (self.cg.solves > 0).then(|| self.cg.iterations as f64 / self.cg.solves as f64)
+        (self.newton_solves > 0).then(|| self.cg.iterations as f64 / self.newton_solves as f64)
+    }
+
+    /// Mean Newton steps per implicit Euler step so far, if any were taken.
+    pub fn newton_iterations_per_step(&self) -> Option<f64> {
+        (self.newton_solves > 0).then(|| self.newton_steps as f64 / self.newton_solves as f64)
     }
 
     fn fit(&mut self, n: usize) {
@@ -223,7 +231,6 @@ pub struct Cg {
     /// The threaded K u's split of the blocks.
     buffers: SpringBuffers,
     pub iterations: u64,
-    pub solves: u64,
     pub unconverged: u64,
     pub last_iterations: u32,
 }
@@ -244,46 +251,38 @@ impl Cg {
     }
 }
 
-/// Backward Euler linearised once per step (one Newton step):
-/// (M − dt² K) Δv = dt (f0 + dt K v0), v1 = v0 + Δv, solved matrix-free by block-Jacobi-
-/// preconditioned conjugate gradients, warm-started from the previous Δv. K is the spring
-/// Jacobian with the transverse term of compressed springs dropped (coefficient
-/// max(0, 1 − L/l)), which keeps M − dt² K symmetric positive definite. Pinned particles are
-/// held (their rows are projected out). K u and the vector updates share the solver threads
-/// like the explicit passes; the reductions sum per chunk, so the thread count changes the
-/// result by round-off only.
-pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings, threads: &SolverThreads) {
+/// Backward Euler by Newton's method on M (v − v0) = h f(x0 + h v), `newton` steps, each linear
+/// solve by block-Jacobi-preconditioned conjugate gradients.
+///
+/// The first step is the classic one (Baraff and Witkin), linearised at x0:
+/// (M − h² K0) Δv = h (f0 + h K0 v0), v1 = v0 + Δv, warm-started from the previous step's Δv.
+/// Each further step linearises at x_k = x0 + h v_k: (M − h² K_k) δ = M (v0 − v_k) + h f(x_k),
+/// v_{k+1} = v_k + δ, which converges to the exact backward Euler step. K is the spring Jacobian
+/// with the transverse term of compressed springs dropped (coefficient max(0, 1 − L/l)), which
+/// keeps M − h² K symmetric positive definite; the residual is exact, so the iteration still
+/// converges to the exact step, only the rate changes. Pinned particles are held (their rows
+/// are projected out). K u and the vector updates share the solver threads like the explicit
+/// passes; the reductions sum per chunk, so the thread count changes the result by round-off.
+pub fn implicit_euler(
+    s: &mut Solver,
+    dt: f64,
+    settings: CgSettings,
+    newton: u32,
+    gravity: DVec2,
+    threads: &SolverThreads,
+) {
     let n = s.x.len();
     let springs = s.springs.len();
-    let cg = &mut s.scratch.cg;
-    cg.fit(n, springs);
+    s.scratch.fit(n);
+    s.scratch.cg.fit(n, springs);
     let h2 = dt * dt;
-    // The chunks' partial sums (two lanes each), combined.
-    let sum = |a: DVec2, b: DVec2| a + b;
-    let sum_pairs = |a: (DVec2, DVec2), b: (DVec2, DVec2)| (a.0 + b.0, a.1 + b.1);
+    if newton > 1 {
+        s.scratch.stage_v.copy_from_slice(&s.v); // v0
+    }
 
-    // Stiffness blocks at x0, and the preconditioner: the inverse of each particle's 2×2
-    // diagonal block of A = M − dt² K (block Jacobi; a particle's springs pull it along their
-    // directions, which a scalar diagonal cannot express).
+    // Step 1: b = dt (f0 + dt K0 v0), zero on pinned particles, into z.
+    let cg = &mut s.scratch.cg;
     stiffness::blocks_threaded(threads, &s.springs, &s.x, &mut cg.blocks);
-    for (d, &m) in cg.diag.iter_mut().zip(&s.mass) {
-        *d = Sym2::scaled_identity(m);
-    }
-    for block in &cg.blocks {
-        cg.diag[block.a as usize].add_scaled(block.m, h2);
-        cg.diag[block.b as usize].add_scaled(block.m, h2);
-    }
-    threads.each(springs, (&mut cg.diag[..], &s.inv_mass[..]), |(diag, w)| {
-        for (d, &w) in diag.iter_mut().zip(w) {
-            *d = if w != 0.0 {
-                d.inverse_or_zero()
-            } else {
-                Sym2::default()
-            };
-        }
-    });
-
-    // b = dt (f0 + dt K v0), zero on pinned particles; z holds b for now.
     stiffness::apply_threaded(threads, &mut cg.buffers, &mut cg.ap, &s.v, &cg.blocks); // K v0
     let data = (&mut cg.z[..], &s.f[..], &cg.ap[..], &s.inv_mass[..]);
     let b_norm2 = threads.chunked(
@@ -302,9 +301,109 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings, threads: &S
             }
             norm2
         },
-        sum,
+        |a, b| a + b,
     );
-    // r = b − A dv (warm start).
+    solve(s, h2, b_norm2.element_sum(), settings, threads);
+    let cg = &s.scratch.cg;
+    threads.each(springs, (&mut s.v[..], &cg.dv[..]), |(v, dv)| {
+        for (v, dv) in v.iter_mut().zip(dv) {
+            *v += *dv;
+        }
+    });
+    if newton > 1 {
+        // The first step's Δv warm-starts the next time step's first solve.
+        let sc = &mut s.scratch;
+        sc.sum_u.copy_from_slice(&sc.cg.dv);
+    }
+
+    for _ in 1..newton {
+        // x_k = x0 + h v_k and f(x_k), into the stage buffers.
+        let sc = &mut s.scratch;
+        threads.each(
+            springs,
+            (&mut sc.x[..], &s.x[..], &s.v[..]),
+            |(xk, x, v)| {
+                for i in 0..xk.len() {
+                    xk[i] = x[i] + v[i] * dt;
+                }
+            },
+        );
+        stage_forces(s, gravity, threads);
+        let sc = &mut s.scratch;
+        let cg = &mut sc.cg;
+        stiffness::blocks_threaded(threads, &s.springs, &sc.x, &mut cg.blocks);
+        // b = M (v0 − v_k) + h f(x_k); δ starts from 0.
+        let data = (
+            &mut cg.z[..],
+            &mut cg.dv[..],
+            &sc.f[..],
+            &sc.stage_v[..],
+            &s.v[..],
+            &s.mass[..],
+            &s.inv_mass[..],
+        );
+        let b_norm2 = threads.chunked(
+            springs,
+            data,
+            |(z, dv, f, v0, v, m, w)| {
+                let mut norm2 = DVec2::ZERO;
+                for i in 0..z.len() {
+                    let b = if w[i] != 0.0 {
+                        (v0[i] - v[i]) * m[i] + f[i] * dt
+                    } else {
+                        DVec2::ZERO
+                    };
+                    z[i] = b;
+                    dv[i] = DVec2::ZERO;
+                    norm2 += b * b;
+                }
+                norm2
+            },
+            |a, b| a + b,
+        );
+        solve(s, h2, b_norm2.element_sum(), settings, threads);
+        let cg = &s.scratch.cg;
+        threads.each(springs, (&mut s.v[..], &cg.dv[..]), |(v, dv)| {
+            for (v, dv) in v.iter_mut().zip(dv) {
+                *v += *dv;
+            }
+        });
+    }
+    let sc = &mut s.scratch;
+    if newton > 1 {
+        sc.cg.dv.copy_from_slice(&sc.sum_u);
+    }
+    sc.newton_steps += newton.max(1) as u64;
+    sc.newton_solves += 1;
+}
+
+/// Solves (M − h² K) dv = b by preconditioned CG, K the blocks in `cg.blocks`, b in `cg.z`
+/// (|b|² = `b_norm2`), from the start in `cg.dv`; counts the iterations.
+fn solve(s: &mut Solver, h2: f64, b_norm2: f64, settings: CgSettings, threads: &SolverThreads) {
+    let springs = s.springs.len();
+    let cg = &mut s.scratch.cg;
+    let sum_pairs = |a: (DVec2, DVec2), b: (DVec2, DVec2)| (a.0 + b.0, a.1 + b.1);
+
+    // The preconditioner: the inverse of each particle's 2×2 diagonal block of A = M − h² K
+    // (block Jacobi; a particle's springs pull it along their directions, which a scalar
+    // diagonal cannot express).
+    for (d, &m) in cg.diag.iter_mut().zip(&s.mass) {
+        *d = Sym2::scaled_identity(m);
+    }
+    for block in &cg.blocks {
+        cg.diag[block.a as usize].add_scaled(block.m, h2);
+        cg.diag[block.b as usize].add_scaled(block.m, h2);
+    }
+    threads.each(springs, (&mut cg.diag[..], &s.inv_mass[..]), |(diag, w)| {
+        for (d, &w) in diag.iter_mut().zip(w) {
+            *d = if w != 0.0 {
+                d.inverse_or_zero()
+            } else {
+                Sym2::default()
+            };
+        }
+    });
+    // r = b − A dv (warm start), pinned rows held at 0.
     threads.each(springs, (&mut cg.dv[..], &s.inv_mass[..]), |(dv, w)| {
         for (dv, &w) in dv.iter_mut().zip(w) {
             if w == 0.0 {
@@ -341,7 +440,7 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings, threads: &S
         },
         sum_pairs,
     );
-    let tol2 = settings.tolerance * settings.tolerance * b_norm2.element_sum();
+    let tol2 = settings.tolerance * settings.tolerance * b_norm2;
     let (mut r2, mut rz) = (r2.element_sum(), rz.element_sum());
     let mut iterations = 0;
     while r2 > tol2 && iterations < settings.max_iterations {
@@ -387,16 +486,10 @@ pub fn implicit_euler(s: &mut Solver, dt: f64, settings: CgSettings, threads: &S
         iterations += 1;
     }
     cg.iterations += iterations as u64;
-    cg.solves += 1;
     cg.last_iterations = iterations;
     if r2 > tol2 {
         cg.unconverged += 1;
     }
-    threads.each(springs, (&mut s.v[..], &cg.dv[..]), |(v, dv)| {
-        for (v, dv) in v.iter_mut().zip(dv) {
-            *v += *dv;
-        }
-    });
 }
 
 /// ap = A u = M u + dt² K u from ap = K u (K the positive semi-definite stiffness), pinned rows

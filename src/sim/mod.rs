@@ -15,6 +15,7 @@ pub(crate) mod kernels;
 pub(crate) mod parallel;
 pub mod params;
 pub mod profile;
+pub(crate) mod projective;
 pub mod schedule;
 pub mod solver;
 pub mod stability;
@@ -23,6 +24,7 @@ pub(crate) mod sync;
 pub mod tear;
 pub mod watch;
 pub(crate) mod wide;
+pub(crate) mod xpbd;
 
 pub use components::*;
 pub use integrators::CgSettings;
@@ -34,5 +36,5 @@ pub use schedule::{PhysicsSet, StepSet};
 pub use schedule::{
     PhysicsStep, PhysicsSystems, SimPlugin, StepBudget, StepSystems, TickPlan, advance, pack,
 };
-pub use solver::{Energy, PackedSpring, Solver};
+pub use solver::{Energy, PackedSpring, SolveStats, Solver};
 pub use stability::StabilityEstimate;

@@ -19,18 +19,30 @@ pub enum Integrator {
     VelocityVerlet,
     /// Classic four-stage Runge-Kutta on x'' = f(x)/m (fourth order, not symplectic).
     Rk4,
-    /// Backward Euler, one Newton step solved by conjugate gradients (first order, dissipative).
+    /// Backward Euler by Newton's method, each step solved by conjugate gradients (first
+    /// order, dissipative). [`Iterations::newton`] Newton steps per step; the default 1 is
+    /// the classic linearised step.
     ImplicitEuler,
+    /// Projective dynamics (Liu et al. 2013): local/global iterations on the backward Euler
+    /// objective, the constant global matrix factored once by sparse Cholesky
+    /// ([`Iterations::projective`] per step).
+    ProjectiveDynamics,
+    /// XPBD (Macklin et al. 2016): springs as compliant distance constraints (α = 1/k),
+    /// [`Iterations::xpbd_substeps`] substeps of [`Iterations::xpbd_sweeps`] Gauss-Seidel
+    /// sweeps each.
+    Xpbd,
 }
 
 impl Integrator {
     /// Every integrator, in the order of the README's table.
-    pub const ALL: [Integrator; 5] = [
+    pub const ALL: [Integrator; 7] = [
         Integrator::ExplicitEuler,
         Integrator::SymplecticEuler,
         Integrator::VelocityVerlet,
         Integrator::Rk4,
         Integrator::ImplicitEuler,
+        Integrator::ProjectiveDynamics,
+        Integrator::Xpbd,
     ];
 
     /// The name used on the command line and in reports (`symplectic-euler`, `rk4`, ...).
@@ -41,6 +53,95 @@ impl Integrator {
             Integrator::VelocityVerlet => "velocity-verlet",
             Integrator::Rk4 => "rk4",
             Integrator::ImplicitEuler => "implicit-euler",
+            Integrator::ProjectiveDynamics => "projective-dynamics",
+            Integrator::Xpbd => "xpbd",
+        }
+    }
+
+    /// Whether the method needs the spring forces at the start of the step (the force pass's
+    /// spring sweep). Projective dynamics and XPBD work on positions and read only the body
+    /// forces (gravity and external forces).
+    pub fn reads_spring_forces(self) -> bool {
+        !matches!(self, Integrator::ProjectiveDynamics | Integrator::Xpbd)
+    }
+
+    /// Stable for any dt (the implicit methods).
+    pub fn unconditionally_stable(self) -> bool {
+        matches!(
+            self,
+            Integrator::ImplicitEuler | Integrator::ProjectiveDynamics | Integrator::Xpbd
+        )
+    }
+}
+
+/// How much work the iterative methods do each step. Only the selected integrator's counts
+/// are read.
+///
+/// ```
+/// # use hooke::sim::{Integrator, SimParams};
+/// let mut app = hooke::headless_app();
+/// let mut params = app.world_mut().resource_mut::<SimParams>();
+/// params.integrator = Integrator::Xpbd;
+/// params.iterations.xpbd_substeps = 20;
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Iterations {
+    /// Implicit Euler: Newton steps per time step (each a linear solve by CG). 1 is the classic
+    /// step linearised at the start of the step; more converge to the exact backward Euler
+    /// step.
+    pub newton: u32,
+    /// Projective dynamics: local/global iterations per time step.
+    pub projective: u32,
+    /// XPBD: substeps per time step.
+    pub xpbd_substeps: u32,
+    /// XPBD: constraint sweeps per substep.
+    pub xpbd_sweeps: u32,
+}
+
+impl Iterations {
+    /// The largest count a field may hold (a typo of 10⁹ iterations is an error, not a hang).
+    pub const MAX: u32 = 100_000;
+    /// The rule every count must meet, as the error messages say it.
+    pub const RULE: &'static str = "must be between 1 and 100000";
+
+    /// The fields' names, as a scene file writes them.
+    pub const NAMES: [&'static str; 4] = ["newton", "projective", "xpbd_substeps", "xpbd_sweeps"];
+    /// The fields' paths in [`SimParams`] (for [`InputProblem::field`]), in the same order.
+    pub const PARAM_FIELDS: [&'static str; 4] = [
+        "SimParams.iterations.newton",
+        "SimParams.iterations.projective",
+        "SimParams.iterations.xpbd_substeps",
+        "SimParams.iterations.xpbd_sweeps",
+    ];
+
+    /// The counts, in the order of [`Iterations::NAMES`].
+    pub fn values(&self) -> [u32; 4] {
+        [
+            self.newton,
+            self.projective,
+            self.xpbd_substeps,
+            self.xpbd_sweeps,
+        ]
+    }
+
+    /// The first count outside 1..=[`Iterations::MAX`], as (field index, value): the one check
+    /// that the scene loader, the command line and the per-tick input check share.
+    pub fn out_of_range(&self) -> Option<(usize, u32)> {
+        self.values()
+            .into_iter()
+            .enumerate()
+            .find(|&(_, v)| !(1..=Self::MAX).contains(&v))
+    }
+}
+
+impl Default for Iterations {
+    fn default() -> Self {
+        Iterations {
+            newton: 1,
+            projective: 10,
+            xpbd_substeps: 10,
+            xpbd_sweeps: 1,
         }
     }
 }
@@ -82,6 +183,8 @@ pub struct SimParams {
     /// Tearing: a spring stretched past (1 + strain) × its rest length breaks (is despawned) at
     /// the end of the tick. `None` = springs never break, and the tear pass does not run.
     pub tear: Option<f64>,
+    /// Iteration counts of implicit Euler, projective dynamics and XPBD.
+    pub iterations: Iterations,
 }
 
 impl Default for SimParams {
@@ -95,6 +198,7 @@ impl Default for SimParams {
             paused: false,
             stiffness_override: None,
             tear: None,
+            iterations: Iterations::default(),
         }
     }
 }

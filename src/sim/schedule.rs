@@ -248,7 +248,8 @@ impl Plugin for SimPlugin {
                 .add_systems((
                     (
                         apply_gravity,
-                        accumulate_spring_forces.run_if(scene_has_springs),
+                        accumulate_spring_forces
+                            .run_if(scene_has_springs.and_then(integrator_reads_spring_forces)),
                     )
                         .chain()
                         .in_set(StepSystems::Forces),
@@ -258,6 +259,8 @@ impl Plugin for SimPlugin {
                         velocity_verlet.run_if(integrator_is(Integrator::VelocityVerlet)),
                         rk4.run_if(integrator_is(Integrator::Rk4)),
                         implicit_euler.run_if(integrator_is(Integrator::ImplicitEuler)),
+                        projective_dynamics.run_if(integrator_is(Integrator::ProjectiveDynamics)),
+                        xpbd.run_if(integrator_is(Integrator::Xpbd)),
                     )
                         // One runs; chained, so that they are ordered for ambiguity detection.
                         .chain()
@@ -284,6 +287,12 @@ pub fn simulation_running(params: Res<SimParams>, status: Res<SimStatus>) -> boo
 /// Run condition: the scene has springs.
 pub fn scene_has_springs(solver: Res<Solver>) -> bool {
     !solver.springs.is_empty()
+}
+
+/// Run condition: the integrator reads the spring forces at the start of the step (projective
+/// dynamics and XPBD read only the body forces, so the force pass's spring sweep does not run).
+pub fn integrator_reads_spring_forces(params: Res<SimParams>) -> bool {
+    params.integrator.reads_spring_forces()
 }
 
 /// Only the selected integrator's system runs.
@@ -389,7 +398,48 @@ fn implicit_euler(
     threads: Res<SolverThreads>,
     mut n: ResMut<PassCounts>,
 ) {
-    integrators::implicit_euler(&mut solver, params.dt, *settings, &threads);
+    let newton = params.iterations.newton;
+    integrators::implicit_euler(
+        &mut solver,
+        params.dt,
+        *settings,
+        newton,
+        params.gravity,
+        &threads,
+    );
+    n.integrate += 1;
+}
+
+fn projective_dynamics(
+    mut solver: ResMut<Solver>,
+    params: Res<SimParams>,
+    threads: Res<SolverThreads>,
+    mut n: ResMut<PassCounts>,
+) {
+    let iterations = params.iterations.projective;
+    if let Err(e) = super::projective::step(&mut solver, params.dt, iterations, &threads) {
+        // Only when memory runs out: with m > 0 and k >= 0 (checked) M + h²L is positive
+        // definite. The step is refused like a blow-up, which pauses with the last good state.
+        eprintln!("hooke: {e}");
+        solver.non_finite = true;
+    }
+    n.integrate += 1;
+}
+
+fn xpbd(
+    mut solver: ResMut<Solver>,
+    params: Res<SimParams>,
+    threads: Res<SolverThreads>,
+    mut n: ResMut<PassCounts>,
+) {
+    let it = params.iterations;
+    super::xpbd::step(
+        &mut solver,
+        params.dt,
+        it.xpbd_substeps,
+        it.xpbd_sweeps,
+        &threads,
+    );
     n.integrate += 1;
 }
 
@@ -428,8 +478,13 @@ fn advance_positions(
 ) {
     let s = &mut *solver;
     let drift = match params.integrator {
-        Integrator::ExplicitEuler | Integrator::VelocityVerlet | Integrator::Rk4 => &s.drift,
-        Integrator::SymplecticEuler | Integrator::ImplicitEuler => &s.v,
+        Integrator::ExplicitEuler
+        | Integrator::VelocityVerlet
+        | Integrator::Rk4
+        | Integrator::Xpbd => &s.drift,
+        Integrator::SymplecticEuler
+        | Integrator::ImplicitEuler
+        | Integrator::ProjectiveDynamics => &s.v,
     };
     let dt = params.dt;
     let finite = threads.chunked(

@@ -69,6 +69,13 @@ pub struct Solver {
     pub(crate) scratch: super::integrators::Scratch,
     /// Per-thread buffers of the parallel spring pass.
     pub(crate) spring_buffers: super::parallel::SpringBuffers,
+    /// Bumped whenever the spring graph, a stiffness, a mass or a pin changes: the methods
+    /// that precompute from these (projective dynamics' factor, XPBD's colouring) redo it.
+    pub(crate) revision: u64,
+    /// Projective dynamics' factored matrix and counters.
+    pub(crate) projective: super::projective::Projective,
+    /// XPBD's constraint colouring and counters.
+    pub(crate) xpbd: super::xpbd::Xpbd,
 }
 
 /// Read access for users: the packed state is the solver's own (the sync writes it, the
@@ -122,6 +129,52 @@ impl Solver {
     pub fn cg_iterations_per_step(&self) -> Option<f64> {
         self.scratch.cg_iterations_per_step()
     }
+    /// What the iterative methods did so far: iterations per step, factorisations and their
+    /// time, colours.
+    pub fn solve_stats(&self) -> SolveStats {
+        let pd = &self.projective;
+        SolveStats {
+            newton_iterations_per_step: self.scratch.newton_iterations_per_step(),
+            cg_iterations_per_step: self.scratch.cg_iterations_per_step(),
+            projective_iterations_per_step: pd.iterations_per_step(),
+            factorizations: pd.factorizations,
+            factorization_seconds: pd.factor_seconds,
+            factor_nonzeros: pd.factor_nonzeros(),
+            xpbd_sweeps_per_step: self.xpbd.sweeps_per_step(),
+            xpbd_colours: self.xpbd.colours(),
+        }
+    }
+
+    /// Marks the spring graph, a stiffness, a mass or a pin as changed.
+    pub(crate) fn touch(&mut self) {
+        self.revision = self.revision.wrapping_add(1);
+    }
+}
+
+/// The iterative methods' work so far (see [`Solver::solve_stats`]); a figure is `None` (or 0)
+/// when its method has not run.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct SolveStats {
+    /// Implicit Euler: Newton steps per time step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub newton_iterations_per_step: Option<f64>,
+    /// Implicit Euler: conjugate-gradient iterations per time step, all Newton steps together.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cg_iterations_per_step: Option<f64>,
+    /// Projective dynamics: local/global iterations per time step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub projective_iterations_per_step: Option<f64>,
+    /// Projective dynamics: factorisations of M + h²L.
+    pub factorizations: u64,
+    /// Projective dynamics: their wall time, s.
+    pub factorization_seconds: f64,
+    /// Projective dynamics: nonzeros of the last Cholesky factor.
+    pub factor_nonzeros: usize,
+    /// XPBD: constraint sweeps per time step (substeps × sweeps).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub xpbd_sweeps_per_step: Option<f64>,
+    /// XPBD: colours of the constraint graph (sweeps run colour by colour).
+    pub xpbd_colours: usize,
 }
 
 impl Solver {
@@ -146,6 +199,7 @@ impl Solver {
             s.k = k.unwrap_or(*own);
         }
         self.applied_override = k;
+        self.touch();
     }
 
     /// Total mechanical energy: Σ ½m|v|² − Σ m g·x + Σ ½k(|xa−xb|−L)².

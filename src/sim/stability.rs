@@ -11,7 +11,7 @@
 //! 2√2 ≈ 2.83, implicit Euler none. Explicit Euler grows every mode by sqrt(1 + h²ω²) per
 //! step, so it is stable only thanks to damping: (1 + h²ω²) e^(−2μh) < 1, about h < 2μ/ω².
 
-use super::params::{Integrator, SimParams};
+use super::params::{Integrator, Iterations, SimParams};
 use super::solver::Solver;
 use super::stiffness;
 use bevy::math::DVec2;
@@ -39,6 +39,10 @@ pub struct StabilityEstimate {
     pub limit: f64,
     /// The largest stable dt for this scene and integrator (infinite when unconditional).
     pub stable_dt: f64,
+    /// The fraction of the fastest mode's amplitude the method itself keeps per step, before
+    /// damping μ ([`amplitude_kept`]): below 1 for the implicit methods, the cost of their
+    /// stability.
+    pub fastest_mode_kept: f64,
 }
 
 impl StabilityEstimate {
@@ -185,7 +189,9 @@ pub fn limit(integrator: Integrator, dt: f64, damping: f64) -> f64 {
     match integrator {
         Integrator::SymplecticEuler | Integrator::VelocityVerlet => 2.0,
         Integrator::Rk4 => 2.0 * std::f64::consts::SQRT_2,
-        Integrator::ImplicitEuler => f64::INFINITY,
+        Integrator::ImplicitEuler | Integrator::ProjectiveDynamics | Integrator::Xpbd => {
+            f64::INFINITY
+        }
         // (1 + (hω)²) e^(−2μh) < 1  ⇔  hω < sqrt(e^(2μh) − 1).
         Integrator::ExplicitEuler => ((2.0 * damping * dt).exp() - 1.0).max(0.0).sqrt(),
     }
@@ -198,7 +204,7 @@ pub fn stable_dt(integrator: Integrator, omega: f64, damping: f64) -> f64 {
         return f64::INFINITY;
     }
     match integrator {
-        Integrator::ImplicitEuler => f64::INFINITY,
+        i if i.unconditionally_stable() => f64::INFINITY,
         Integrator::ExplicitEuler => {
             if damping <= 0.0 {
                 return 0.0;
@@ -230,5 +236,27 @@ pub fn estimate(s: &Solver, params: &SimParams) -> StabilityEstimate {
         h_omega,
         limit: limit(params.integrator, params.dt, params.damping),
         stable_dt: stable_dt(params.integrator, omega_estimate, params.damping),
+        fastest_mode_kept: amplitude_kept(params.integrator, h_omega, params.iterations),
+    }
+}
+
+/// What the method's own numerical damping leaves of the fastest mode's amplitude per step
+/// (1: none; damping μ comes on top). The price of unconditional stability:
+/// * backward Euler (implicit Euler to convergence, and projective dynamics, which converges to
+///   it) maps an undamped mode of frequency ω to 1/sqrt(1 + (hω)²) of its amplitude per step;
+/// * XPBD's substep is, for one constraint, exactly backward Euler of size h/n (its projection
+///   with compliance α is the implicit spring force), so n substeps keep (1 + (hω/n)²)^(−n/2);
+/// * the explicit methods below their limit keep it all (symplectic Euler, Verlet) or nearly
+///   (RK4, whose small loss is not modelled here); explicit Euler gains.
+pub fn amplitude_kept(integrator: Integrator, h_omega: f64, iterations: Iterations) -> f64 {
+    let backward = |x: f64| 1.0 / (1.0 + x * x).sqrt();
+    match integrator {
+        Integrator::ImplicitEuler | Integrator::ProjectiveDynamics => backward(h_omega),
+        Integrator::Xpbd => {
+            let n = iterations.xpbd_substeps.max(1) as f64;
+            backward(h_omega / n).powf(n)
+        }
+        Integrator::ExplicitEuler => (1.0 + h_omega * h_omega).sqrt(),
+        Integrator::SymplecticEuler | Integrator::VelocityVerlet | Integrator::Rk4 => 1.0,
     }
 }

@@ -91,6 +91,7 @@ pub fn sync_into_solver(
         if mass.is_changed() || solver.inv_mass[i].to_bits() != w.to_bits() {
             solver.mass[i] = mass.0;
             solver.inv_mass[i] = w;
+            solver.touch();
         }
         if external.is_changed() {
             solver.external[i] = external.0;
@@ -211,6 +212,11 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &mut Springs
         non_finite: false,
         scratch: Default::default(),
         spring_buffers: Default::default(),
+        // The new revision makes the large-step methods redo their precomputation; their
+        // counters carry on.
+        revision: solver.revision.wrapping_add(1),
+        projective: std::mem::take(&mut solver.projective),
+        xpbd: std::mem::take(&mut solver.xpbd),
     };
 }
 

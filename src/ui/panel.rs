@@ -50,6 +50,8 @@ fn edit_label(old: &SimParams, new: &SimParams) -> Option<&'static str> {
         Some("tearing")
     } else if old.gravity != new.gravity {
         Some("gravity")
+    } else if old.iterations != new.iterations {
+        Some("iterations")
     } else {
         None
     }
@@ -210,6 +212,7 @@ pub fn side_panel(
                         }
                     });
                 ui.end_row();
+                iteration_rows(ui, p.integrator, &mut p.iterations);
 
                 ui.label("Stiffness k");
                 let slider = egui::Slider::new(&mut state.stiffness, 10.0..=1e6)
@@ -237,7 +240,7 @@ pub fn side_panel(
 
                 ui.label("Time step dt");
                 ui.add(
-                    egui::Slider::new(&mut p.dt, 1e-6..=1.0 / 60.0)
+                    egui::Slider::new(&mut p.dt, 1e-6..=1.0 / 30.0)
                         .logarithmic(true)
                         .custom_formatter(|v, _| format!("{v:.2e}"))
                         .suffix(" s"),
@@ -331,6 +334,50 @@ pub fn side_panel(
     Ok(())
 }
 
+/// The selected method's iteration counts, as rows of the parameter grid (none for the
+/// explicit methods).
+fn iteration_rows(ui: &mut egui::Ui, integrator: Integrator, it: &mut Iterations) {
+    let row = |ui: &mut egui::Ui, label: &str, value: &mut u32, max: u32, hint: &str| {
+        ui.label(label);
+        let slider = egui::Slider::new(value, 1..=max).logarithmic(true);
+        ui.add(slider).on_hover_text(hint);
+        ui.end_row();
+    };
+    match integrator {
+        Integrator::ImplicitEuler => row(
+            ui,
+            "Newton steps",
+            &mut it.newton,
+            50,
+            "1: linearised once (the classic step); more converge to exact backward Euler",
+        ),
+        Integrator::ProjectiveDynamics => row(
+            ui,
+            "Iterations",
+            &mut it.projective,
+            500,
+            "local/global iterations per step; the matrix is factored once",
+        ),
+        Integrator::Xpbd => {
+            row(
+                ui,
+                "Substeps",
+                &mut it.xpbd_substeps,
+                200,
+                "substeps per step",
+            );
+            row(
+                ui,
+                "Sweeps",
+                &mut it.xpbd_sweeps,
+                50,
+                "constraint sweeps per substep",
+            );
+        }
+        _ => {}
+    }
+}
+
 /// The panel's other resources (a system takes at most 16 parameters).
 #[derive(SystemParam)]
 pub struct PanelExtras<'w> {
@@ -382,6 +429,23 @@ fn stability_readout(ui: &mut egui::Ui, s: &StabilityEstimate, integrator: Integ
         "ω_max ≈ {:.0} rad/s (Gershgorin bound {:.0}); {stable_dt}{note}",
         s.omega_estimate, s.omega_bound
     ));
+    if integrator.unconditionally_stable() && s.h_omega > 0.0 {
+        ui.small(numerical_damping_note(s.fastest_mode_kept));
+    }
+}
+
+/// What unconditional stability costs: the fastest mode's amplitude left per step by the method
+/// itself, and after how many steps it is down to 1/e.
+fn numerical_damping_note(kept: f64) -> String {
+    let e_fold = if kept > 0.0 && kept < 1.0 {
+        format!(", 1/e after {:.1} steps", -1.0 / kept.ln())
+    } else {
+        String::new()
+    };
+    format!(
+        "the method's own damping keeps {:.1} % of the fastest mode per step{e_fold}",
+        kept * 100.0
+    )
 }
 
 /// The method's order and what the work-precision report measured at this dt.

@@ -8,7 +8,11 @@ const REPORT: &str = include_str!("../../docs/work-precision.csv");
 /// The order of accuracy of each method.
 pub fn order(i: Integrator) -> u32 {
     match i {
-        Integrator::ExplicitEuler | Integrator::SymplecticEuler | Integrator::ImplicitEuler => 1,
+        Integrator::ExplicitEuler
+        | Integrator::SymplecticEuler
+        | Integrator::ImplicitEuler
+        | Integrator::ProjectiveDynamics
+        | Integrator::Xpbd => 1,
         Integrator::VelocityVerlet => 2,
         Integrator::Rk4 => 4,
     }

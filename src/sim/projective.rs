@@ -1,0 +1,306 @@
+//! Projective dynamics (Liu, Bargteil, O'Brien and Kavan 2013, "Fast Simulation of
+//! Mass-Spring Systems"): backward Euler as the minimisation of
+//!
+//! Φ(x) = 1/(2h²) ‖x − y‖²_M + Σ_s ½ k_s ‖x_a − x_b − d_s‖²,  y = x0 + h v0 + h² M⁻¹ f_body,
+//!
+//! over the positions x and, per spring, a vector d_s of length L_s (for the best d_s,
+//! ‖x_a − x_b − d_s‖ = | |x_a − x_b| − L_s |, so the minimum over x is the backward Euler step).
+//! Each iteration alternates
+//! * the local step: d_s = L_s (x_a − x_b)/|x_a − x_b| for every spring (a pair pass, threaded
+//!   like the spring forces), and
+//! * the global step: (M + h² L) x = M y + h² J d, with L = Σ k_s A_s A_sᵀ the weighted graph
+//!   Laplacian. The matrix depends only on masses, stiffnesses, the spring graph, the pins and
+//!   h, so it is factored once (faer's sparse Cholesky, AMD ordering) and every iteration costs
+//!   one forward and one backward substitution, for x and y together (an n × 2 right-hand side:
+//!   the factor is read once per iteration).
+//!
+//! Particles with inverse mass 0 (pinned or held) are eliminated: their end-of-step position
+//! x0 + h v0 is known, and their springs move it to the right-hand side. Every iteration lowers
+//! Φ, and the iterations start from x0 + h v0 (the inertial guess without the body forces):
+//! at rest that is the previous step's shape, so a settled state is the exact equilibrium for
+//! any iteration count (the fixed points of a descent step are Φ's minimisers). The step ends
+//! with v1 = (x1 − x0)/h; damping, ground contact and the position update follow as for
+//! implicit Euler.
+
+use super::parallel::{PairPass, SolverThreads, SpringBuffers, scatter};
+use super::solver::{PackedSpring, Solver};
+use bevy::math::DVec2;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
+use faer::sparse::linalg::cholesky::{SymbolicCholesky, factorize_symbolic_cholesky};
+use faer::sparse::{SparseColMat, Triplet};
+use faer::{Conj, MatMut, Par, Side};
+use std::time::Instant;
+
+/// What the factorisation was computed for: redone when any of it changes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Key {
+    /// [`Solver::revision`]: the spring graph, stiffnesses, masses and pins.
+    revision: u64,
+    /// The time step's bits.
+    dt: u64,
+}
+
+/// The factored global matrix and the buffers of the iterations, kept from step to step.
+#[derive(Default)]
+pub struct Projective {
+    key: Option<Key>,
+    /// Dense index of each free particle's row (`u32::MAX` for an eliminated particle).
+    row: Vec<u32>,
+    /// Particle of each row.
+    particle: Vec<u32>,
+    /// Springs with exactly one free end: (free end's row, fixed end, h² k).
+    boundary: Vec<(u32, u32, f64)>,
+    symbolic: Option<SymbolicCholesky<usize>>,
+    factor: Vec<f64>,
+    stack: Option<MemBuffer>,
+    /// The iterate, all particles.
+    z: Vec<DVec2>,
+    /// M y, all particles (constant over the step).
+    my: Vec<DVec2>,
+    /// The right-hand side, all particles, before the gather.
+    b: Vec<DVec2>,
+    /// Rows × 2, column-major: the gathered right-hand side, then the solution.
+    rhs: Vec<f64>,
+    buffers: SpringBuffers,
+    /// Factorisations so far.
+    pub factorizations: u64,
+    /// Wall time of the factorisations so far, s.
+    pub factor_seconds: f64,
+    /// Local/global iterations so far.
+    pub iterations: u64,
+    /// Steps so far.
+    pub steps: u64,
+}
+
+impl std::fmt::Debug for Projective {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Projective")
+            .field("rows", &self.particle.len())
+            .field("factor_nonzeros", &self.factor.len())
+            .field("factorizations", &self.factorizations)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Clone for Projective {
+    /// A clone starts without the factorisation (it is redone at its first step).
+    fn clone(&self) -> Self {
+        Projective::default()
+    }
+}
+
+/// The local step's right-hand side: h² k_s d_s to end a, −h² k_s d_s to end b.
+struct LocalStep<'z> {
+    z: &'z [DVec2],
+    h2: f64,
+}
+
+impl PairPass for LocalStep<'_> {
+    type Pair = PackedSpring;
+    #[inline(always)]
+    fn run(&self, springs: &[PackedSpring], mut add: impl FnMut(usize, DVec2)) {
+        for s in springs {
+            let (a, b) = (s.a as usize, s.b as usize);
+            let l = self.z[a] - self.z[b];
+            let len = l.length();
+            // Coincident ends: d = l (no force), as the spring force kernel does.
+            let d = if len > 0.0 { l * (s.rest / len) } else { l };
+            let c = d * (self.h2 * s.k);
+            add(a, c);
+            add(b, -c);
+        }
+    }
+}
+
+impl Projective {
+    /// Builds and factors M + h² L over the free particles when the key changed.
+    fn prepare(&mut self, s: &Solver, dt: f64, threads: &SolverThreads) -> Result<(), String> {
+        let key = Key {
+            revision: s.revision,
+            dt: dt.to_bits(),
+        };
+        if self.key == Some(key) {
+            return Ok(());
+        }
+        let start = Instant::now();
+        let n = s.x.len();
+        let h2 = dt * dt;
+        self.row.clear();
+        self.particle.clear();
+        for (i, &w) in s.inv_mass.iter().enumerate() {
+            if w != 0.0 {
+                self.row.push(self.particle.len() as u32);
+                self.particle.push(i as u32);
+            } else {
+                self.row.push(u32::MAX);
+            }
+        }
+        let rows = self.particle.len();
+        let mut diagonal: Vec<f64> = self.particle.iter().map(|&i| s.mass[i as usize]).collect();
+        let mut entries = Vec::with_capacity(rows + s.springs.len());
+        self.boundary.clear();
+        for sp in &s.springs {
+            let (ra, rb) = (self.row[sp.a as usize], self.row[sp.b as usize]);
+            let c = h2 * sp.k;
+            match (ra != u32::MAX, rb != u32::MAX) {
+                (true, true) => {
+                    diagonal[ra as usize] += c;
+                    diagonal[rb as usize] += c;
+                    // The lower triangle only.
+                    let (r, col) = (ra.max(rb) as usize, ra.min(rb) as usize);
+                    entries.push(Triplet::new(r, col, -c));
+                }
+                (true, false) => {
+                    diagonal[ra as usize] += c;
+                    self.boundary.push((ra, sp.b, c));
+                }
+                (false, true) => {
+                    diagonal[rb as usize] += c;
+                    self.boundary.push((rb, sp.a, c));
+                }
+                (false, false) => {}
+            }
+        }
+        entries.extend(
+            diagonal
+                .iter()
+                .enumerate()
+                .map(|(r, &d)| Triplet::new(r, r, d)),
+        );
+        let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(rows, rows, &entries)
+            .map_err(|e| format!("projective dynamics: cannot assemble M + h²L: {e:?}"))?;
+        let symbolic = factorize_symbolic_cholesky(
+            matrix.symbolic(),
+            Side::Lower,
+            Default::default(),
+            Default::default(),
+        )
+        .map_err(|e| format!("projective dynamics: symbolic factorisation failed: {e:?}"))?;
+        let par = parallelism(threads, s.springs.len());
+        self.factor.clear();
+        self.factor.resize(symbolic.len_val(), 0.0);
+        let scratch = symbolic
+            .factorize_numeric_llt_scratch::<f64>(par, Default::default())
+            .or(symbolic.solve_in_place_scratch::<f64>(2, Par::Seq));
+        let mut stack = MemBuffer::try_new(scratch)
+            .map_err(|_| "projective dynamics: out of memory for the factorisation".to_string())?;
+        symbolic
+            .factorize_numeric_llt::<f64>(
+                &mut self.factor,
+                matrix.as_ref(),
+                Side::Lower,
+                LltRegularization::default(),
+                par,
+                MemStack::new(&mut stack),
+                Default::default(),
+            )
+            .map_err(|e| format!("projective dynamics: M + h²L is not positive definite: {e:?}"))?;
+        self.symbolic = Some(symbolic);
+        self.stack = Some(stack);
+        for buf in [&mut self.z, &mut self.my, &mut self.b] {
+            buf.resize(n, DVec2::ZERO);
+        }
+        self.rhs.resize(2 * rows, 0.0);
+        self.buffers = SpringBuffers::default();
+        self.key = Some(key);
+        self.factorizations += 1;
+        self.factor_seconds += start.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// Nonzeros of the Cholesky factor (0 before the first step).
+    pub fn factor_nonzeros(&self) -> usize {
+        self.factor.len()
+    }
+
+    /// Mean iterations per step so far, if any step was taken.
+    pub fn iterations_per_step(&self) -> Option<f64> {
+        (self.steps > 0).then(|| self.iterations as f64 / self.steps as f64)
+    }
+}
+
+/// The factorisation may share the pool on a big scene (it runs once); the substitutions run on
+/// the calling thread (measured: splitting them gained nothing at 256²).
+fn parallelism(threads: &SolverThreads, springs: usize) -> Par {
+    if threads.threads() > 1 && springs >= super::parallel::PARALLEL_MIN_SPRINGS {
+        Par::rayon(threads.threads())
+    } else {
+        Par::Seq
+    }
+}
+
+/// One projective dynamics step of `iterations` local/global iterations: sets v to
+/// (x1 − x0)/h for the free particles (see the module docs). `s.f` holds the body forces.
+pub fn step(
+    s: &mut Solver,
+    dt: f64,
+    iterations: u32,
+    threads: &SolverThreads,
+) -> Result<(), String> {
+    let mut pd = std::mem::take(&mut s.projective);
+    let result = pd.prepare(s, dt, threads).map(|()| {
+        pd.run(s, dt, iterations, threads);
+    });
+    s.projective = pd;
+    result
+}
+
+impl Projective {
+    fn run(&mut self, s: &mut Solver, dt: f64, iterations: u32, threads: &SolverThreads) {
+        let h2 = dt * dt;
+        let springs = s.springs.len();
+        // z = x0 + h v0 (eliminated particles' final positions); M y = m (z + h² f/m).
+        let data = (
+            &mut self.z[..],
+            &mut self.my[..],
+            &s.x[..],
+            &s.v[..],
+            &s.f[..],
+            &s.mass[..],
+        );
+        threads.each(springs, data, |(z, my, x, v, f, m)| {
+            for i in 0..z.len() {
+                z[i] = x[i] + v[i] * dt;
+                my[i] = z[i] * m[i] + f[i] * h2;
+            }
+        });
+        let rows = self.particle.len();
+        for _ in 0..iterations {
+            self.b.copy_from_slice(&self.my);
+            let local = LocalStep { z: &self.z, h2 };
+            scatter(threads, &mut self.buffers, &mut self.b, &s.springs, &local);
+            for &(r, fixed, c) in &self.boundary {
+                let p = self.z[fixed as usize] * c;
+                let i = self.particle[r as usize] as usize;
+                self.b[i] += p;
+            }
+            let (col_x, col_y) = self.rhs.split_at_mut(rows);
+            for (r, &i) in self.particle.iter().enumerate() {
+                let b = self.b[i as usize];
+                col_x[r] = b.x;
+                col_y[r] = b.y;
+            }
+            if let (Some(symbolic), Some(stack)) = (&self.symbolic, &mut self.stack) {
+                let llt = faer::sparse::linalg::cholesky::LltRef::new(symbolic, &self.factor);
+                let rhs = MatMut::from_column_major_slice_mut(&mut self.rhs, rows, 2);
+                llt.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(stack));
+            }
+            let (col_x, col_y) = self.rhs.split_at(rows);
+            for (r, &i) in self.particle.iter().enumerate() {
+                self.z[i as usize] = DVec2::new(col_x[r], col_y[r]);
+            }
+        }
+        let inv_h = 1.0 / dt;
+        let data = (&mut s.v[..], &self.z[..], &s.x[..], &s.inv_mass[..]);
+        threads.each(springs, data, |(v, z, x, w)| {
+            for i in 0..v.len() {
+                if w[i] != 0.0 {
+                    v[i] = (z[i] - x[i]) * inv_h;
+                }
+            }
+        });
+        self.iterations += iterations as u64;
+        self.steps += 1;
+    }
+}

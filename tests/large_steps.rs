@@ -1,0 +1,331 @@
+//! The large-step methods: projective dynamics and XPBD beside implicit Euler to convergence.
+
+mod common;
+
+use bevy::math::DVec2;
+use common::*;
+use hooke::scene::Scene;
+use hooke::sim::{self, CgSettings, Integrator, Iterations, SimParams, stability};
+
+/// A chain of `n` particles of mass `m` hanging straight down from a pinned one, each spring
+/// (stiffness k) at its rest length `rest`: released, it sags under gravity.
+fn hanging_chain(integrator: Integrator, dt: f64, n: usize, k: f64) -> Scene {
+    let rest = 0.04;
+    let mut scene = bare_scene(integrator, dt);
+    scene.gravity = (0.0, -9.8);
+    scene.particles = (0..=n)
+        .map(|i| particle(0.5, 0.95 - rest * i as f64, i == 0))
+        .collect();
+    scene.springs = (0..n).map(|i| spring(i, i + 1, k, rest)).collect();
+    scene
+}
+
+fn set_iterations(app: &mut bevy::prelude::App, iterations: Iterations) {
+    app.world_mut().resource_mut::<SimParams>().iterations = iterations;
+}
+
+fn max_difference(a: &[DVec2], b: &[DVec2]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (*p - *q).length())
+        .fold(0.0, f64::max)
+}
+
+/// Projective dynamics minimises the backward Euler objective; Newton's method solves its
+/// optimality condition. Both iterated to convergence give the same step, to 1e-8 (here
+/// ~1e-12), on the 2D network (four particles of three masses, one pinned) and on a stiff
+/// chain (h²k/m = 2.8) at dt = 1/60 s.
+#[test]
+fn converged_projective_dynamics_is_converged_newton_backward_euler() {
+    let dt = 1.0 / 60.0;
+    for scene in [
+        network(Integrator::ProjectiveDynamics, dt),
+        hanging_chain(Integrator::ProjectiveDynamics, dt, 8, 1e4),
+    ] {
+        let mut pd = app_with(scene.clone());
+        set_iterations(
+            &mut pd,
+            Iterations {
+                projective: 20_000,
+                ..Default::default()
+            },
+        );
+        let mut newton = app_with(Scene {
+            integrator: Integrator::ImplicitEuler,
+            ..scene
+        });
+        set_iterations(
+            &mut newton,
+            Iterations {
+                newton: 40,
+                ..Default::default()
+            },
+        );
+        newton.insert_resource(CgSettings {
+            tolerance: 1e-15,
+            max_iterations: 2000,
+        });
+        for step in 1..=10 {
+            common::step(&mut pd, 1);
+            common::step(&mut newton, 1);
+            let dx = max_difference(solver(&pd).x(), solver(&newton).x());
+            let dv = max_difference(solver(&pd).v(), solver(&newton).v());
+            assert!(
+                dx < 1e-8 && dv * dt < 1e-8,
+                "step {step}: |Δx| {dx:e}, |Δv| {dv:e}"
+            );
+        }
+        let stats = solver(&pd).solve_stats();
+        assert_eq!(
+            stats.factorizations, 1,
+            "one factorisation for the whole run"
+        );
+        assert_eq!(stats.projective_iterations_per_step, Some(20_000.0));
+    }
+}
+
+/// One Newton step (the default) is not the converged step on a nonlinear network: more
+/// Newton steps change the result, and by the time it has converged, further steps do not.
+#[test]
+fn newton_steps_converge_to_backward_euler() {
+    let dt = 1.0 / 60.0;
+    let run = |newton: u32| {
+        let mut app = app_with(network(Integrator::ImplicitEuler, dt));
+        set_iterations(
+            &mut app,
+            Iterations {
+                newton,
+                ..Default::default()
+            },
+        );
+        app.insert_resource(CgSettings {
+            tolerance: 1e-14,
+            max_iterations: 2000,
+        });
+        common::step(&mut app, 5);
+        solver(&app).x().to_vec()
+    };
+    let (one, many, more) = (run(1), run(30), run(40));
+    assert!(
+        max_difference(&one, &many) > 1e-6,
+        "one Newton step is already exact?"
+    );
+    assert!(max_difference(&many, &more) < 1e-12);
+}
+
+/// m·g·N(N+1)/(2k): the static drop of the last of N particles (each of mass m) hanging from a
+/// pin by N springs of stiffness k (spring j from the bottom carries j masses).
+fn static_drop(n: usize, k: f64) -> f64 {
+    9.8 * (n * (n + 1)) as f64 / (2.0 * k)
+}
+
+/// Both methods settle to the exact static shape of a hanging chain (10 links, k = 1e4,
+/// dt = 1/60 s), at these counts and tolerances (relative error of the drop):
+/// * projective dynamics at its default 10 iterations: 1e-9. It starts each step's iterations
+///   from the previous shape, so a settled state is a fixed point of its descent: the
+///   minimiser, whatever the iteration count.
+/// * XPBD with 5 sweeps per substep (10 substeps): 1e-9.
+/// * XPBD at its default one sweep per substep is soft: the chain sags 2.5 % too far at 10
+///   substeps, and the excess falls as 1/substeps² (0.025 % at 100). The test holds it to
+///   between 1 % and 3 %, and to 3e-4 at 100 substeps.
+#[test]
+fn both_settle_to_the_exact_static_sag_of_a_hanging_chain() {
+    let (n, k, dt) = (10, 1e4, 1.0 / 60.0);
+    let exact = static_drop(n, k);
+    let counts = |xpbd_substeps, xpbd_sweeps| Iterations {
+        xpbd_substeps,
+        xpbd_sweeps,
+        ..Default::default()
+    };
+    for (integrator, iterations, range) in [
+        (
+            Integrator::ProjectiveDynamics,
+            Iterations::default(),
+            0.0..1e-9,
+        ),
+        (Integrator::Xpbd, counts(10, 5), 0.0..1e-9),
+        (Integrator::Xpbd, counts(10, 1), 1e-2..3e-2),
+        (Integrator::Xpbd, counts(100, 1), 0.0..3e-4),
+    ] {
+        let mut scene = hanging_chain(integrator, dt, n, k);
+        scene.damping = 5.0;
+        let mut app = app_with(scene);
+        set_iterations(&mut app, iterations);
+        let top = pos(&app, 0);
+        let length = 0.04 * n as f64;
+        common::step(&mut app, 1200); // 20 s
+        let drop = top.y - pos(&app, n).y - length;
+        let error = (drop - exact).abs() / exact;
+        assert!(
+            range.contains(&error),
+            "{integrator} {iterations:?}: drop {drop:.6e}, exact {exact:.6e}, relative error \
+             {error:.2e}, expected within {range:?}"
+        );
+        assert!(vel(&app, n).length() < 1e-6, "{integrator} has not settled");
+    }
+}
+
+/// At h·ω_max = 100 the explicit methods explode at once; the implicit ones stay finite and
+/// only lose energy, with no velocity damping to help (μ = 0): the total energy never exceeds
+/// its starting value (1e-9 relative for round-off) and ends clearly below it. (Step by step
+/// it is not monotone: backward Euler dissipates for a convex potential, and a compressed
+/// spring's is not; projective dynamics at 10 iterations measured a rise of 1e-7 relative in
+/// one step.)
+#[test]
+fn stable_and_dissipative_at_h_omega_100() {
+    for integrator in [
+        Integrator::ProjectiveDynamics,
+        Integrator::Xpbd,
+        Integrator::ImplicitEuler,
+    ] {
+        let mut scene = network(integrator, 1.0 / 60.0);
+        scene.particles[2].vel = (3.0, -1.0); // start it moving
+        // Stiffness for h·ω_max = 100 at dt = 1/60 (ω_max scales with sqrt(k)).
+        let probe = app_with(scene.clone());
+        let params = probe.world().resource::<SimParams>().clone();
+        let h_omega = stability::estimate(solver(&probe), &params).h_omega;
+        let scale = (100.0 / h_omega).powi(2);
+        for s in &mut scene.springs {
+            s.stiffness *= scale;
+        }
+        let mut app = app_with(scene);
+        let params = app.world().resource::<SimParams>().clone();
+        let estimate = stability::estimate(solver(&app), &params);
+        assert!(
+            (estimate.h_omega - 100.0).abs() < 1.0,
+            "h·ω = {}",
+            estimate.h_omega
+        );
+        assert!(estimate.stable_dt.is_infinite() && estimate.limit.is_infinite());
+        let g = params.gravity;
+        let start = solver(&app).energy(g).total();
+        let mut energy = start;
+        for step in 1..=600 {
+            common::step(&mut app, 1);
+            assert!(solver(&app).state_is_finite(), "{integrator}: step {step}");
+            energy = solver(&app).energy(g).total();
+            assert!(
+                energy <= start + 1e-9 * start.abs(),
+                "{integrator}: step {step} has more energy than the start, {start} -> {energy}"
+            );
+        }
+        let lost = (start - energy) / start.abs();
+        assert!(lost > 1e-3, "{integrator} lost only {lost:e} of its energy");
+    }
+}
+
+/// What the panel and `h_omega_max`/`stable_dt` say: no limit, and a numerical damping of the
+/// fastest mode that grows with h·ω (backward Euler's 1/sqrt(1 + (hω)²) per step, and XPBD's
+/// substeps' product of the same).
+#[test]
+fn the_stability_estimate_knows_the_new_methods_are_unconditional() {
+    for integrator in [Integrator::ProjectiveDynamics, Integrator::Xpbd] {
+        let app = app_with(network(integrator, 1.0 / 60.0));
+        let params = app.world().resource::<SimParams>().clone();
+        let e = stability::estimate(solver(&app), &params);
+        assert!(e.limit.is_infinite() && e.stable_dt.is_infinite());
+        assert_eq!(e.margin(), 0.0);
+        let kept = e.fastest_mode_kept;
+        assert!(kept > 0.0 && kept < 1.0, "{integrator}: kept {kept}");
+    }
+    // Backward Euler keeps 1/sqrt(1 + (hω)²); XPBD's n substeps (1 + (hω/n)²)^(−n/2): less
+    // damping of the slower modes (hω = 1), more of the fastest (hω = 10 with n = 10).
+    let it = Iterations::default();
+    let kept = |i, h_omega| stability::amplitude_kept(i, h_omega, it);
+    let (pd, xpbd) = (Integrator::ProjectiveDynamics, Integrator::Xpbd);
+    assert!((kept(pd, 10.0) - 1.0 / 101f64.sqrt()).abs() < 1e-15);
+    assert!((kept(xpbd, 10.0) - 1.0 / 32.0).abs() < 1e-15);
+    assert!(kept(xpbd, 1.0) > kept(pd, 1.0));
+}
+
+/// An external force m·a moves the new methods exactly as a gravity of a does: they read it
+/// where they read gravity (the body forces), at every iteration and substep.
+#[test]
+fn external_forces_reach_the_new_methods() {
+    for integrator in [Integrator::ProjectiveDynamics, Integrator::Xpbd] {
+        let a = DVec2::new(2.0, -3.0);
+        let mut with_gravity = network(integrator, 1.0 / 120.0);
+        with_gravity.gravity = (a.x, a.y);
+        let mut gravity_app = app_with(with_gravity.clone());
+        let mut force_app = app_with(Scene {
+            gravity: (0.0, 0.0),
+            ..with_gravity
+        });
+        {
+            let world = force_app.world_mut();
+            let mut q = world.query::<(&sim::Mass, &mut sim::ExternalForce)>();
+            for (m, mut f) in q.iter_mut(world) {
+                f.0 = a * m.0;
+            }
+        }
+        common::step(&mut gravity_app, 60);
+        common::step(&mut force_app, 60);
+        let d = max_difference(solver(&gravity_app).x(), solver(&force_app).x());
+        assert!(d < 1e-12, "{integrator}: {d:e}");
+    }
+}
+
+/// The spring force sweep does not run for the methods that do not read it, and the
+/// factorisation is redone when, and only when, what it depends on changes.
+#[test]
+fn projective_dynamics_refactors_only_when_the_matrix_changes() {
+    let mut app = app_with(network(Integrator::ProjectiveDynamics, 1.0 / 60.0));
+    common::step(&mut app, 20);
+    let counts = *app.world().resource::<sim::PassCounts>();
+    assert_eq!(counts.springs, 0, "the spring force sweep ran");
+    assert_eq!(counts.gravity, 20);
+    let factorizations = |app: &bevy::prelude::App| solver(app).solve_stats().factorizations;
+    assert_eq!(factorizations(&app), 1);
+    // Damping, gravity and the iteration count leave the matrix alone.
+    {
+        let mut p = app.world_mut().resource_mut::<SimParams>();
+        p.damping = 3.0;
+        p.gravity = DVec2::new(0.0, -5.0);
+        p.iterations.projective = 4;
+    }
+    common::step(&mut app, 5);
+    assert_eq!(factorizations(&app), 1);
+    // dt, stiffness and mass change it.
+    app.world_mut().resource_mut::<SimParams>().dt = 1.0 / 30.0;
+    common::step(&mut app, 5);
+    assert_eq!(factorizations(&app), 2);
+    app.world_mut()
+        .resource_mut::<SimParams>()
+        .stiffness_override = Some(500.0);
+    common::step(&mut app, 5);
+    assert_eq!(factorizations(&app), 3);
+    {
+        let world = app.world_mut();
+        let mut q = world.query::<&mut sim::Mass>();
+        if let Some(mut m) = q.iter_mut(world).nth(1) {
+            m.0 = 3.0;
+        }
+    }
+    common::step(&mut app, 5);
+    assert_eq!(factorizations(&app), 4);
+}
+
+/// XPBD colours its constraints so that a colour's projections are independent: two threads
+/// give one thread's result bit for bit on a cloth big enough to be split.
+#[test]
+fn xpbd_on_two_threads_equals_one_bit_for_bit() {
+    let cloth = |threads| {
+        let loaded = hooke::scene::presets::resolve("assets/scenes/bench/cloth256.ron").unwrap();
+        let mut scene = loaded.scene.clone();
+        scene.integrator = Integrator::Xpbd;
+        scene.dt = 1.0 / 60.0;
+        let mut app = app_with(scene);
+        app.insert_resource(sim::SolverThreads::new(threads).unwrap());
+        set_iterations(
+            &mut app,
+            Iterations {
+                xpbd_substeps: 2,
+                ..Default::default()
+            },
+        );
+        common::step(&mut app, 3);
+        solver(&app).x().to_vec()
+    };
+    let (one, two) = (cloth(1), cloth(2));
+    assert!(one.iter().zip(&two).all(|(a, b)| a == b));
+}
