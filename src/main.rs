@@ -77,6 +77,14 @@ enum BenchCommand {
         #[arg(long, default_value_t = 3)]
         repeat: usize,
     },
+    /// Every method at real-time steps (dt = 1/30 to 1/960 s) on four scenes: error against a
+    /// fine RK4 reference, wall time per simulated second, iterations, and the static sag
+    /// against the true equilibrium; writes CSV, markdown and diagrams.
+    LargeSteps {
+        /// Directory to write into.
+        #[arg(long, default_value = "docs")]
+        out: PathBuf,
+    },
     /// Largest stable dt per hard scene and integrator (bisection) against the theoretical
     /// limit, and the energy change at half that dt; writes CSV and a markdown table.
     Stability {
@@ -165,6 +173,7 @@ fn main() -> ExitCode {
         Some(Command::Bench(BenchCommand::Stability { out, scenes, steps })) => {
             stability(&out, &scenes, steps)
         }
+        Some(Command::Bench(BenchCommand::LargeSteps { out })) => large_steps(&out),
     }
 }
 
@@ -282,6 +291,45 @@ fn work_precision(out: &std::path::Path, quick: bool) -> ExitCode {
         &[
             ("work-precision.csv", &wp::csv(&report.rows)),
             ("work-precision.md", &md),
+        ],
+    )
+}
+
+fn large_steps(out: &std::path::Path) -> ExitCode {
+    use hooke::bench::{large_steps as ls, plot};
+    if let Err(e) = std::fs::create_dir_all(out) {
+        return fail(format!("cannot create {}: {e}", out.display()));
+    }
+    let machine = hooke::bench::machine();
+    eprintln!("hooke bench large-steps on {machine}");
+    let problems = match ls::problems() {
+        Ok(p) => p,
+        Err(e) => return fail(e),
+    };
+    let report = match ls::run(&problems, |what| eprintln!("  {what}")) {
+        Ok(r) => r,
+        Err(e) => return fail(e),
+    };
+    for p in &problems {
+        let rows: Vec<&hooke::bench::work_precision::Row> = report
+            .rows
+            .iter()
+            .filter(|r| r.row.scene == p.name)
+            .map(|r| &r.row)
+            .collect();
+        let stem = out.join(format!("large-steps-{}", p.name));
+        let title = format!("large steps: {} (dt = 1/30 to 1/960 s)", p.name);
+        let x_label = "wall time per simulated second (s)";
+        if let Err(e) = plot::write_diagram_with(&rows, &title, x_label, &stem) {
+            return fail(e);
+        }
+    }
+    let md = ls::markdown(&report, &machine, "hooke bench large-steps");
+    write_report(
+        out,
+        &[
+            ("large-steps.csv", &ls::csv(&report.rows)),
+            ("large-steps.md", &md),
         ],
     )
 }

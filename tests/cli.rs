@@ -205,12 +205,68 @@ fn bad_scene_files() {
     let o = hooke(&["run", "--scene", invalid.to_str().unwrap()]);
     assert_bad_input(&o, "particles[0]: mass must be finite and > 0");
     assert!(stderr(&o).contains("springs[0]: b = 3 is out of range"));
+
+    let zero = temp("zero-iterations.ron");
+    std::fs::write(
+        &zero,
+        "(gravity: (0.0, -9.8), damping: 1.0, ground: None, integrator: Xpbd, dt: 0.01, \
+         particles: [(pos: (0.0, 0.0))], iterations: (xpbd_sweeps: 0))",
+    )
+    .unwrap();
+    let o = hooke(&["run", "--scene", zero.to_str().unwrap()]);
+    assert_bad_input(
+        &o,
+        "iterations.xpbd_sweeps: must be between 1 and 100000, got 0",
+    );
+}
+
+/// The large-step methods through the CLI: the iteration flags take effect and the report
+/// says what the solvers did (projective dynamics' factorisation, XPBD's sweeps).
+#[test]
+fn large_step_methods_report_their_iterations() {
+    let common = [
+        "run", "--scene", "cloth32", "--dt", "0.02", "--steps", "5", "--json",
+    ];
+    let mut args = common.to_vec();
+    args.extend_from_slice(&[
+        "--integrator",
+        "projective-dynamics",
+        "--pd-iterations",
+        "7",
+    ]);
+    let r = json(&hooke(&args));
+    assert_eq!(r["finite"], true);
+    assert_eq!(r["iterations"]["projective"], 7);
+    assert_eq!(r["solve"]["projective_iterations_per_step"], 7.0);
+    assert_eq!(r["solve"]["factorizations"], 1);
+    assert!(r["solve"]["factorization_seconds"].as_f64().unwrap() > 0.0);
+    assert!(r["stable_dt"].is_null());
+    let mut args = common.to_vec();
+    args.extend_from_slice(&["--integrator", "xpbd", "--xpbd-substeps", "4"]);
+    args.extend_from_slice(&["--xpbd-iterations", "3"]);
+    let r = json(&hooke(&args));
+    assert_eq!(r["solve"]["xpbd_sweeps_per_step"], 12.0);
+    assert_eq!(r["solve"]["xpbd_colours"], 8);
+    let mut args = common.to_vec();
+    args.extend_from_slice(&["--integrator", "implicit-euler", "--newton-iterations", "3"]);
+    let r = json(&hooke(&args));
+    assert_eq!(r["solve"]["newton_iterations_per_step"], 3.0);
 }
 
 #[test]
 fn bad_flags() {
-    let cases: [(&[&str], &str); 8] = [
+    let cases: [(&[&str], &str); 12] = [
         (&["--dt", "-1"], "--dt must be finite and > 0"),
+        (
+            &["--pd-iterations", "0"],
+            "--pd-iterations must be between 1 and 100000, got 0",
+        ),
+        (
+            &["--xpbd-substeps", "1000000"],
+            "--xpbd-substeps must be between 1 and 100000",
+        ),
+        (&["--newton-iterations", "-2"], "-2"),
+        (&["--xpbd-iterations", "many"], "many"),
         (&["--dt", "NaN"], "--dt must be finite and > 0"),
         (
             &["--stiffness", "-3"],

@@ -8,6 +8,14 @@ use std::path::Path;
 
 const SIZE: (u32, u32) = (960, 640);
 
+/// Colours of the series that are not an integrator's own (variants with other settings).
+const SPARE: [RGBColor; 4] = [
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(0, 0, 0),
+];
+
 fn colour(i: Integrator) -> RGBColor {
     match i {
         Integrator::ExplicitEuler => RGBColor(214, 39, 40),
@@ -22,6 +30,16 @@ fn colour(i: Integrator) -> RGBColor {
 
 /// Writes `<stem>.svg` and `<stem>.png` for one scene's rows.
 pub fn write_diagram(rows: &[&Row], title: &str, stem: &Path) -> Result<(), String> {
+    write_diagram_with(rows, title, "wall time (s)", stem)
+}
+
+/// [`write_diagram`] with another label for the time axis.
+pub fn write_diagram_with(
+    rows: &[&Row],
+    title: &str,
+    x_label: &str,
+    stem: &Path,
+) -> Result<(), String> {
     // The PNG's text is drawn by ab_glyph from egui's bundled font: no system fonts needed.
     let _ = plotters::style::register_font(
         "sans-serif",
@@ -30,12 +48,10 @@ pub fn write_diagram(rows: &[&Row], title: &str, stem: &Path) -> Result<(), Stri
     );
     let svg = stem.with_extension("svg");
     let png = stem.with_extension("png");
-    draw(SVGBackend::new(&svg, SIZE).into_drawing_area(), rows, title)?;
-    draw(
-        BitMapBackend::new(&png, SIZE).into_drawing_area(),
-        rows,
-        title,
-    )?;
+    let svg_area = SVGBackend::new(&svg, SIZE).into_drawing_area();
+    draw(svg_area, rows, title, x_label)?;
+    let png_area = BitMapBackend::new(&png, SIZE).into_drawing_area();
+    draw(png_area, rows, title, x_label)?;
     Ok(())
 }
 
@@ -43,6 +59,7 @@ fn draw<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     rows: &[&Row],
     title: &str,
+    x_label: &str,
 ) -> Result<(), String>
 where
     DB::ErrorType: 'static,
@@ -75,19 +92,29 @@ where
         .map_err(e)?;
     chart
         .configure_mesh()
-        .x_desc("wall time (s)")
+        .x_desc(x_label)
         .y_desc("max position error (m)")
         .x_label_formatter(&|v| format!("{v:.0e}"))
         .y_label_formatter(&|v| format!("{v:.0e}"))
         .label_style(("sans-serif", 15))
         .draw()
         .map_err(e)?;
-    for i in Integrator::ALL {
-        let c = colour(i);
-        let mut mine: Vec<&&Row> = rows
-            .iter()
-            .filter(|r| r.integrator == i.cli_name())
-            .collect();
+    // One series per label, in the order the rows name them; an integrator's own name gets
+    // its colour, a variant (`implicit-euler ×10`) the next of the spare ones.
+    let mut labels: Vec<&str> = vec![];
+    for r in rows {
+        if !labels.contains(&r.integrator.as_str()) {
+            labels.push(&r.integrator);
+        }
+    }
+    let mut spare = SPARE.iter().cycle();
+    for label in labels {
+        let c = Integrator::ALL
+            .into_iter()
+            .find(|i| i.cli_name() == label)
+            .map(colour)
+            .unwrap_or_else(|| *spare.next().unwrap_or(&BLACK));
+        let mut mine: Vec<&&Row> = rows.iter().filter(|r| r.integrator == label).collect();
         mine.sort_by(|a, b| b.dt.total_cmp(&a.dt));
         let line: Vec<(f64, f64)> = mine
             .iter()
@@ -97,7 +124,7 @@ where
         chart
             .draw_series(LineSeries::new(line.clone(), c.stroke_width(2)))
             .map_err(e)?
-            .label(i.cli_name())
+            .label(label.to_string())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], c.stroke_width(3)));
         chart
             .draw_series(line.iter().map(|&p| Circle::new(p, 4, c.filled())))

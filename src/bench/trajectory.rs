@@ -20,6 +20,8 @@ pub struct Trajectory {
     pub finite: bool,
     /// Mean conjugate-gradient iterations per step (implicit Euler), else 0.
     pub cg_iterations_per_step: f64,
+    /// What the iterative methods did.
+    pub stats: crate::sim::SolveStats,
 }
 
 /// Runs `scene` to time `t_end` in steps of the scene's dt, recording `checkpoints` states.
@@ -40,6 +42,7 @@ pub fn run(scene: &Scene, t_end: f64, checkpoints: u64) -> Result<Trajectory, St
         steps: 0,
         finite: true,
         cg_iterations_per_step: 0.0,
+        stats: Default::default(),
     };
     for _ in 0..checkpoints {
         let start = Instant::now();
@@ -52,6 +55,7 @@ pub fn run(scene: &Scene, t_end: f64, checkpoints: u64) -> Result<Trajectory, St
             break;
         }
     }
+    out.stats = world.resource::<Solver>().solve_stats();
     out.cg_iterations_per_step = world
         .resource::<Solver>()
         .scratch

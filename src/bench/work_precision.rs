@@ -273,7 +273,8 @@ pub fn markdown(report: &Report, command: &str) -> String {
     s
 }
 
-fn fmt_time(s: f64) -> String {
+/// A duration for a table: µs, ms or s.
+pub fn fmt_time(s: f64) -> String {
     if s < 1e-3 {
         format!("{:.0} µs", s * 1e6)
     } else if s < 1.0 {

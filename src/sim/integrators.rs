@@ -304,12 +304,6 @@ pub fn implicit_euler(
         |a, b| a + b,
     );
     solve(s, h2, b_norm2.element_sum(), settings, threads);
-    let cg = &s.scratch.cg;
-    threads.each(springs, (&mut s.v[..], &cg.dv[..]), |(v, dv)| {
-        for (v, dv) in v.iter_mut().zip(dv) {
-            *v += *dv;
-        }
-    });
     if newton > 1 {
         // The first step's Δv warm-starts the next time step's first solve.
         let sc = &mut s.scratch;
@@ -362,12 +356,6 @@ pub fn implicit_euler(
             |a, b| a + b,
         );
         solve(s, h2, b_norm2.element_sum(), settings, threads);
-        let cg = &s.scratch.cg;
-        threads.each(springs, (&mut s.v[..], &cg.dv[..]), |(v, dv)| {
-            for (v, dv) in v.iter_mut().zip(dv) {
-                *v += *dv;
-            }
-        });
     }
     let sc = &mut s.scratch;
     if newton > 1 {
@@ -378,7 +366,8 @@ pub fn implicit_euler(
 }
 
 /// Solves (M − h² K) dv = b by preconditioned CG, K the blocks in `cg.blocks`, b in `cg.z`
-/// (|b|² = `b_norm2`), from the start in `cg.dv`; counts the iterations.
+/// (|b|² = `b_norm2`), from the start in `cg.dv`, counts the iterations, and adds the solution
+/// to the velocities.
 fn solve(s: &mut Solver, h2: f64, b_norm2: f64, settings: CgSettings, threads: &SolverThreads) {
     let springs = s.springs.len();
     let cg = &mut s.scratch.cg;
@@ -490,6 +479,11 @@ fn solve(s: &mut Solver, h2: f64, b_norm2: f64, settings: CgSettings, threads: &
     if r2 > tol2 {
         cg.unconverged += 1;
     }
+    threads.each(springs, (&mut s.v[..], &cg.dv[..]), |(v, dv)| {
+        for (v, dv) in v.iter_mut().zip(dv) {
+            *v += *dv;
+        }
+    });
 }
 
 /// ap = A u = M u + dt² K u from ap = K u (K the positive semi-definite stiffness), pinned rows

@@ -27,9 +27,12 @@ use super::solver::{PackedSpring, Solver};
 use bevy::math::DVec2;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::linalg::cholesky::{SymbolicCholesky, factorize_symbolic_cholesky};
+use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::linalg::cholesky::{
+    CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, factorize_symbolic_cholesky,
+};
 use faer::sparse::{SparseColMat, Triplet};
-use faer::{Conj, MatMut, Par, Side};
+use faer::{Par, Side};
 use std::time::Instant;
 
 /// What the factorisation was computed for: redone when any of it changes.
@@ -51,17 +54,20 @@ pub struct Projective {
     particle: Vec<u32>,
     /// Springs with exactly one free end: (free end's row, fixed end, h² k).
     boundary: Vec<(u32, u32, f64)>,
-    symbolic: Option<SymbolicCholesky<usize>>,
+    /// The factor's structure, supernode by supernode (see [`Supernodes`]).
+    supernodes: Supernodes,
     factor: Vec<f64>,
-    stack: Option<MemBuffer>,
+    /// Particle of each row of the factor (the fill-reducing order).
+    order: Vec<u32>,
     /// The iterate, all particles.
     z: Vec<DVec2>,
     /// M y, all particles (constant over the step).
     my: Vec<DVec2>,
     /// The right-hand side, all particles, before the gather.
     b: Vec<DVec2>,
-    /// Rows × 2, column-major: the gathered right-hand side, then the solution.
-    rhs: Vec<f64>,
+    /// The right-hand side in the factor's row order, then the solution: x and y side by side,
+    /// so that each nonzero of the factor is read once for both.
+    rhs: Vec<DVec2>,
     buffers: SpringBuffers,
     /// Factorisations so far.
     pub factorizations: u64,
@@ -170,19 +176,20 @@ impl Projective {
         );
         let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(rows, rows, &entries)
             .map_err(|e| format!("projective dynamics: cannot assemble M + h²L: {e:?}"))?;
-        let symbolic = factorize_symbolic_cholesky(
-            matrix.symbolic(),
-            Side::Lower,
-            Default::default(),
-            Default::default(),
-        )
-        .map_err(|e| format!("projective dynamics: symbolic factorisation failed: {e:?}"))?;
+        // Supernodal always: the substitutions below walk supernodes (dense column blocks).
+        let params = CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+            ..Default::default()
+        };
+        let symbolic =
+            factorize_symbolic_cholesky(matrix.symbolic(), Side::Lower, Default::default(), params)
+                .map_err(|e| {
+                    format!("projective dynamics: symbolic factorisation failed: {e:?}")
+                })?;
         let par = parallelism(threads, s.springs.len());
         self.factor.clear();
         self.factor.resize(symbolic.len_val(), 0.0);
-        let scratch = symbolic
-            .factorize_numeric_llt_scratch::<f64>(par, Default::default())
-            .or(symbolic.solve_in_place_scratch::<f64>(2, Par::Seq));
+        let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
         let mut stack = MemBuffer::try_new(scratch)
             .map_err(|_| "projective dynamics: out of memory for the factorisation".to_string())?;
         symbolic
@@ -196,12 +203,17 @@ impl Projective {
                 Default::default(),
             )
             .map_err(|e| format!("projective dynamics: M + h²L is not positive definite: {e:?}"))?;
-        self.symbolic = Some(symbolic);
-        self.stack = Some(stack);
+        self.supernodes = Supernodes::of(&symbolic)?;
+        // Row p of the factor is row fwd[p] of the matrix.
+        self.order = match symbolic.perm() {
+            Some(perm) => perm.arrays().0.iter().map(|&r| self.particle[r]).collect(),
+            None => self.particle.clone(),
+        };
+        drop(stack);
         for buf in [&mut self.z, &mut self.my, &mut self.b] {
             buf.resize(n, DVec2::ZERO);
         }
-        self.rhs.resize(2 * rows, 0.0);
+        self.rhs.resize(rows, DVec2::ZERO);
         self.buffers = SpringBuffers::default();
         self.key = Some(key);
         self.factorizations += 1;
@@ -220,8 +232,113 @@ impl Projective {
     }
 }
 
+/// The supernodal structure of the factor L: supernode s spans columns
+/// `begin[s]..begin[s + 1]`; its values are a dense column-major block of
+/// (columns + pattern rows) × columns starting at `values[s]`, the diagonal block on top and
+/// then the rows `row[pattern[s]..pattern[s + 1]]` below it.
+#[derive(Debug, Default, Clone)]
+struct Supernodes {
+    begin: Vec<usize>,
+    values: Vec<usize>,
+    pattern: Vec<usize>,
+    row: Vec<u32>,
+}
+
+impl Supernodes {
+    fn of(symbolic: &SymbolicCholesky<usize>) -> Result<Supernodes, String> {
+        let s = match symbolic.raw() {
+            SymbolicCholeskyRaw::Supernodal(s) => s,
+            // faer keeps a tiny matrix simplicial whatever is asked: each column, its diagonal
+            // first (rows ascending), is then a supernode of one column.
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                let (col, rows) = (s.col_ptr(), s.row_idx());
+                let n = s.nrows();
+                let mut pattern = Vec::with_capacity(n + 1);
+                let mut row = Vec::new();
+                for j in 0..n {
+                    pattern.push(row.len());
+                    if rows.get(col[j]) != Some(&j) {
+                        return Err("projective dynamics: unexpected factor layout".into());
+                    }
+                    row.extend(rows[col[j] + 1..col[j + 1]].iter().map(|&r| r as u32));
+                }
+                pattern.push(row.len());
+                return Ok(Supernodes {
+                    begin: (0..=n).collect(),
+                    values: col[..=n].to_vec(),
+                    pattern,
+                    row,
+                });
+            }
+        };
+        let n = s.n_supernodes();
+        let pattern_start = s.col_ptr_for_row_idx();
+        let mut pattern = Vec::with_capacity(n + 1);
+        let mut row = Vec::new();
+        for (p, &len) in s.nnz_per_super().iter().enumerate().take(n) {
+            pattern.push(row.len());
+            let start = pattern_start[p];
+            row.extend(s.row_idx()[start..start + len].iter().map(|&r| r as u32));
+        }
+        pattern.push(row.len());
+        Ok(Supernodes {
+            begin: s
+                .supernode_begin()
+                .iter()
+                .copied()
+                .chain(s.supernode_end().last().copied())
+                .collect(),
+            values: s.col_ptr_for_val()[..=n].to_vec(),
+            pattern,
+            row,
+        })
+    }
+
+    /// Solves L Lᵀ x = b in place, x and y together: forward through the supernodes, then
+    /// back. Each nonzero of L is read once per substitution for both components.
+    fn solve(&self, l: &[f64], x: &mut [DVec2]) {
+        let n = self.begin.len() - 1;
+        // L y = b.
+        for s in 0..n {
+            let (start, cols) = (self.begin[s], self.begin[s + 1] - self.begin[s]);
+            let pattern = &self.row[self.pattern[s]..self.pattern[s + 1]];
+            let rows = cols + pattern.len();
+            let block = &l[self.values[s]..self.values[s] + rows * cols];
+            for j in 0..cols {
+                let col = &block[j * rows..(j + 1) * rows];
+                let xj = x[start + j] / col[j];
+                x[start + j] = xj;
+                for i in j + 1..cols {
+                    x[start + i] -= xj * col[i];
+                }
+                for (&r, &v) in pattern.iter().zip(&col[cols..]) {
+                    x[r as usize] -= xj * v;
+                }
+            }
+        }
+        // Lᵀ x = y.
+        for s in (0..n).rev() {
+            let (start, cols) = (self.begin[s], self.begin[s + 1] - self.begin[s]);
+            let pattern = &self.row[self.pattern[s]..self.pattern[s + 1]];
+            let rows = cols + pattern.len();
+            let block = &l[self.values[s]..self.values[s] + rows * cols];
+            for j in (0..cols).rev() {
+                let col = &block[j * rows..(j + 1) * rows];
+                let mut acc = x[start + j];
+                for (&r, &v) in pattern.iter().zip(&col[cols..]) {
+                    acc -= x[r as usize] * v;
+                }
+                for i in j + 1..cols {
+                    acc -= x[start + i] * col[i];
+                }
+                x[start + j] = acc / col[j];
+            }
+        }
+    }
+}
+
 /// The factorisation may share the pool on a big scene (it runs once); the substitutions run on
-/// the calling thread (measured: splitting them gained nothing at 256²).
+/// the calling thread.
 fn parallelism(threads: &SolverThreads, springs: usize) -> Par {
     if threads.threads() > 1 && springs >= super::parallel::PARALLEL_MIN_SPRINGS {
         Par::rayon(threads.threads())
@@ -265,7 +382,6 @@ impl Projective {
                 my[i] = z[i] * m[i] + f[i] * h2;
             }
         });
-        let rows = self.particle.len();
         for _ in 0..iterations {
             self.b.copy_from_slice(&self.my);
             let local = LocalStep { z: &self.z, h2 };
@@ -275,20 +391,12 @@ impl Projective {
                 let i = self.particle[r as usize] as usize;
                 self.b[i] += p;
             }
-            let (col_x, col_y) = self.rhs.split_at_mut(rows);
-            for (r, &i) in self.particle.iter().enumerate() {
-                let b = self.b[i as usize];
-                col_x[r] = b.x;
-                col_y[r] = b.y;
+            for (b, &i) in self.rhs.iter_mut().zip(&self.order) {
+                *b = self.b[i as usize];
             }
-            if let (Some(symbolic), Some(stack)) = (&self.symbolic, &mut self.stack) {
-                let llt = faer::sparse::linalg::cholesky::LltRef::new(symbolic, &self.factor);
-                let rhs = MatMut::from_column_major_slice_mut(&mut self.rhs, rows, 2);
-                llt.solve_in_place_with_conj(Conj::No, rhs, Par::Seq, MemStack::new(stack));
-            }
-            let (col_x, col_y) = self.rhs.split_at(rows);
-            for (r, &i) in self.particle.iter().enumerate() {
-                self.z[i as usize] = DVec2::new(col_x[r], col_y[r]);
+            self.supernodes.solve(&self.factor, &mut self.rhs);
+            for (x, &i) in self.rhs.iter().zip(&self.order) {
+                self.z[i as usize] = *x;
             }
         }
         let inv_h = 1.0 / dt;

@@ -1,0 +1,426 @@
+//! Large steps (`hooke bench large-steps`): every method at real-time steps, dt = 1/30 to
+//! 1/960 s, on four scenes, error against a fine RK4 reference and wall time per simulated
+//! second; and the static sag, the distance of each method's settled shape from the true
+//! equilibrium ([`super::equilibrium`]).
+//!
+//! * `cloth32`, `cloth64`: the 32² and 64² cloths (k = 1e4, m = 1, pinned along the top row).
+//! * `stiff-cloth32`: the 32² cloth with k = 1e6.
+//! * `mass-ratio`: the hanging chain whose masses alternate 1 kg and 1 g.
+//!
+//! All with the scenes' damping μ = 10, and no ground (contact is not smooth, and a cloth that
+//! hangs to the floor has no equilibrium of its springs alone). T = 1 s, released from rest.
+//! Error: the largest distance of any particle from the reference over 10 checkpoints.
+
+use super::equilibrium::equilibrium;
+use super::trajectory::{self, max_position_error};
+use super::work_precision::{Row, UNSTABLE_ERROR, fmt_time};
+use crate::scene::{LoadedScene, Scene, presets};
+use crate::sim::{self, Integrator, Iterations, SolveStats};
+use bevy::math::DVec2;
+use std::fmt::Write as _;
+
+const CHECKPOINTS: u64 = 10;
+const T_END: f64 = 1.0;
+
+/// A method of the study: an integrator with its iteration counts.
+#[derive(Debug, Clone)]
+pub struct Method {
+    /// The label in the tables and diagrams.
+    pub label: String,
+    /// The integrator.
+    pub integrator: Integrator,
+    /// Its iteration counts.
+    pub iterations: Iterations,
+}
+
+/// The methods compared: every integrator at its defaults, and the iterative ones also worked
+/// harder (implicit Euler to convergence, projective dynamics at 50 iterations, XPBD at 5
+/// sweeps a substep).
+pub fn methods() -> Vec<Method> {
+    let d = Iterations::default();
+    let mut out: Vec<Method> = Integrator::ALL
+        .into_iter()
+        .map(|integrator| Method {
+            label: integrator.cli_name().to_string(),
+            integrator,
+            iterations: d,
+        })
+        .collect();
+    out.push(Method {
+        label: "implicit-euler ×10 Newton".into(),
+        integrator: Integrator::ImplicitEuler,
+        iterations: Iterations { newton: 10, ..d },
+    });
+    out.push(Method {
+        label: "projective-dynamics ×50".into(),
+        integrator: Integrator::ProjectiveDynamics,
+        iterations: Iterations {
+            projective: 50,
+            ..d
+        },
+    });
+    out.push(Method {
+        label: "xpbd 10×5".into(),
+        integrator: Integrator::Xpbd,
+        iterations: Iterations {
+            xpbd_sweeps: 5,
+            ..d
+        },
+    });
+    out
+}
+
+/// A scene of the study and its reference step.
+pub struct Problem {
+    /// The scene's name.
+    pub name: &'static str,
+    scene: Scene,
+    reference_dt: f64,
+}
+
+fn scene(path: &str) -> Result<Scene, String> {
+    let mut s = presets::resolve(path)
+        .map_err(|e| e.to_string())?
+        .scene
+        .clone();
+    s.ground = None;
+    s.start_paused = false;
+    Ok(s)
+}
+
+/// The four scenes (see the module docs).
+pub fn problems() -> Result<Vec<Problem>, String> {
+    let mut stiff = scene("cloth32")?;
+    for g in &mut stiff.generate {
+        if let crate::scene::Generator::Grid { stiffness, .. } = g {
+            *stiffness = 1e6;
+        }
+    }
+    Ok(vec![
+        Problem {
+            name: "cloth32",
+            scene: scene("cloth32")?,
+            reference_dt: 1e-4,
+        },
+        Problem {
+            name: "cloth64",
+            scene: scene("assets/scenes/bench/cloth64.ron")?,
+            reference_dt: 1e-4,
+        },
+        Problem {
+            name: "stiff-cloth32",
+            scene: stiff,
+            reference_dt: 1e-5,
+        },
+        Problem {
+            name: "mass-ratio",
+            scene: scene("assets/scenes/hard/mass_ratio.ron")?,
+            reference_dt: 1e-5,
+        },
+    ])
+}
+
+/// The swept steps: 1/30 to 1/960 s.
+pub const DTS: [f64; 6] = [
+    1.0 / 30.0,
+    1.0 / 60.0,
+    1.0 / 120.0,
+    1.0 / 240.0,
+    1.0 / 480.0,
+    1.0 / 960.0,
+];
+
+/// One run: a method at a dt on a scene.
+#[derive(Debug, Clone)]
+pub struct LargeRow {
+    /// Error and wall time, as the work-precision study records them.
+    pub row: Row,
+    /// What the iterative methods did.
+    pub stats: SolveStats,
+}
+
+/// The static sag of a method at dt = 1/60 s: how far its settled shape is from the true one.
+#[derive(Debug, Clone)]
+pub struct Sag {
+    /// The scene.
+    pub scene: String,
+    /// The method's label.
+    pub method: String,
+    /// The largest distance of a particle from the equilibrium after settling, m; `None` when
+    /// the method is unstable there.
+    pub distance: Option<f64>,
+    /// The equilibrium's largest drop below the starting shape, m (the scale of the sag).
+    pub sag: f64,
+}
+
+/// The study's results.
+pub struct Report {
+    /// Every run.
+    pub rows: Vec<LargeRow>,
+    /// The static sags.
+    pub sags: Vec<Sag>,
+    /// How each reference was obtained and how converged it is.
+    pub notes: Vec<String>,
+}
+
+fn with(scene: &Scene, m: &Method, dt: f64) -> Scene {
+    Scene {
+        integrator: m.integrator,
+        iterations: m.iterations,
+        dt,
+        ..scene.clone()
+    }
+}
+
+/// Runs the study; `progress` is told what runs.
+pub fn run(problems: &[Problem], mut progress: impl FnMut(&str)) -> Result<Report, String> {
+    let (mut rows, mut sags, mut notes) = (vec![], vec![], vec![]);
+    let rk4 = Method {
+        label: "rk4".into(),
+        integrator: Integrator::Rk4,
+        iterations: Iterations::default(),
+    };
+    for p in problems {
+        let dt = p.reference_dt;
+        progress(&format!("{}: reference rk4 at dt = {dt:e}", p.name));
+        let reference = trajectory::run(&with(&p.scene, &rk4, dt), T_END, CHECKPOINTS)?;
+        let half = trajectory::run(&with(&p.scene, &rk4, dt / 2.0), T_END, CHECKPOINTS)?;
+        let converged = max_position_error(&reference, &half.checkpoints);
+        notes.push(format!(
+            "{}: reference = rk4 at dt = {dt:.0e} s; rk4 at dt/2 differs from it by \
+             {converged:.1e} m.",
+            p.name
+        ));
+        for m in methods() {
+            for dt in DTS {
+                progress(&format!("{}: {} dt = 1/{:.0}", p.name, m.label, 1.0 / dt));
+                let t = trajectory::run(&with(&p.scene, &m, dt), T_END, CHECKPOINTS)?;
+                let error = max_position_error(&t, &reference.checkpoints);
+                rows.push(LargeRow {
+                    row: Row {
+                        scene: p.name.to_string(),
+                        integrator: m.label.clone(),
+                        dt,
+                        steps: t.steps,
+                        wall_s: t.wall_s,
+                        error,
+                        stable: t.finite && error < UNSTABLE_ERROR,
+                        cg_iterations_per_step: t.cg_iterations_per_step,
+                    },
+                    stats: t.stats,
+                });
+            }
+        }
+        sags.extend(static_sags(p, &mut progress)?);
+    }
+    Ok(Report { rows, sags, notes })
+}
+
+/// Each method settled for 10 s at dt = 1/60 s, against the equilibrium found by minimising
+/// the potential from the best settled shape.
+fn static_sags(p: &Problem, progress: &mut impl FnMut(&str)) -> Result<Vec<Sag>, String> {
+    let dt = 1.0 / 60.0;
+    progress(&format!("{}: static sag", p.name));
+    let mut settled = vec![];
+    for m in methods() {
+        let loaded =
+            LoadedScene::from_scene(with(&p.scene, &m, dt), None).map_err(|e| e.to_string())?;
+        let mut app = crate::running_app(&loaded)?;
+        let taken = sim::advance(app.world_mut(), (10.0 / dt) as u64);
+        let solver = app.world().resource::<sim::Solver>();
+        let ok = taken == (10.0 / dt) as u64 && solver.state_is_finite();
+        settled.push((m.label, ok.then(|| solver.x().to_vec())));
+    }
+    // The equilibrium, and the starting shape, from the packed scene.
+    let loaded = LoadedScene::from_scene(with(&p.scene, &methods()[0], dt), None)
+        .map_err(|e| e.to_string())?;
+    let app = crate::running_app(&loaded)?;
+    let solver = app.world().resource::<sim::Solver>();
+    let gravity = DVec2::from(p.scene.gravity);
+    let start = settled
+        .iter()
+        .find(|(label, _)| label == "implicit-euler ×10 Newton")
+        .and_then(|(_, x)| x.clone())
+        .unwrap_or_else(|| solver.x().to_vec());
+    let (eq, residual) = equilibrium(solver, &start, gravity);
+    progress(&format!(
+        "{}: equilibrium found, largest residual force {residual:.1e} N",
+        p.name
+    ));
+    let sag = solver
+        .x()
+        .iter()
+        .zip(&eq)
+        .map(|(a, b)| a.y - b.y)
+        .fold(0.0, f64::max);
+    Ok(settled
+        .into_iter()
+        .map(|(method, x)| Sag {
+            scene: p.name.to_string(),
+            method,
+            distance: x.map(|x| {
+                x.iter()
+                    .zip(&eq)
+                    .map(|(a, b)| a.distance(*b))
+                    .fold(0.0, f64::max)
+            }),
+            sag,
+        })
+        .collect())
+}
+
+/// The rows as CSV, with a header.
+pub fn csv(rows: &[LargeRow]) -> String {
+    let mut s = String::from(
+        "scene,method,dt,steps,wall_s,wall_per_sim_s,error,stable,newton_per_step,\
+         cg_per_step,pd_iterations_per_step,factorizations,factorization_s,xpbd_sweeps_per_step\n",
+    );
+    let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:.2}"));
+    for LargeRow { row: r, stats } in rows {
+        let _ = writeln!(
+            s,
+            "{},{},{:?},{},{:.6e},{:.6e},{:.6e},{},{},{},{},{},{:.4e},{}",
+            r.scene,
+            r.integrator,
+            r.dt,
+            r.steps,
+            r.wall_s,
+            r.wall_s / T_END,
+            r.error,
+            r.stable,
+            opt(stats.newton_iterations_per_step),
+            opt(stats.cg_iterations_per_step),
+            opt(stats.projective_iterations_per_step),
+            stats.factorizations,
+            stats.factorization_seconds,
+            opt(stats.xpbd_sweeps_per_step),
+        );
+    }
+    s
+}
+
+/// The report: per scene, a table of `error / wall time per simulated second` (a row per dt,
+/// a column per method), and the static sags.
+pub fn markdown(report: &Report, machine: &str, command: &str) -> String {
+    let mut s = String::from("# Large steps\n\n");
+    let _ = writeln!(
+        s,
+        "Every method at dt = 1/30 to 1/960 s. Made by `{command}` on {machine}, all solver \
+         threads. A cell reads `error / wall time per simulated second`: error = the largest \
+         distance (m) of any particle from the reference over 10 checkpoints up to T = 1 s; \
+         *unstable* = non-finite or error ≥ {UNSTABLE_ERROR} m. The scenes keep their damping \
+         μ = 10 and have no ground. The wall time includes the ECS sync of every tick (one \
+         step a tick at these dt).\n"
+    );
+    for n in &report.notes {
+        let _ = writeln!(s, "- {n}");
+    }
+    let labels: Vec<String> = methods().into_iter().map(|m| m.label).collect();
+    let mut scenes: Vec<&str> = report.rows.iter().map(|r| r.row.scene.as_str()).collect();
+    scenes.dedup();
+    for scene in scenes {
+        let rows: Vec<&LargeRow> = report
+            .rows
+            .iter()
+            .filter(|r| r.row.scene == scene)
+            .collect();
+        let _ = writeln!(
+            s,
+            "\n## {scene}\n\n![large steps {scene}](large-steps-{scene}.png)\n"
+        );
+        let _ = write!(s, "| dt (s) |");
+        for l in &labels {
+            let _ = write!(s, " {l} |");
+        }
+        let _ = write!(s, "\n| ---: |");
+        for _ in &labels {
+            let _ = write!(s, " ---: |");
+        }
+        s.push('\n');
+        for dt in DTS {
+            let _ = write!(s, "| 1/{:.0} |", 1.0 / dt);
+            for l in &labels {
+                let cell = rows
+                    .iter()
+                    .find(|r| r.row.dt == dt && &r.row.integrator == l)
+                    .map(|r| {
+                        if r.row.stable {
+                            format!("{:.1e} / {}", r.row.error, fmt_time(r.row.wall_s / T_END))
+                        } else {
+                            "unstable".into()
+                        }
+                    })
+                    .unwrap_or_default();
+                let _ = write!(s, " {cell} |");
+            }
+            s.push('\n');
+        }
+        let _ = writeln!(
+            s,
+            "\nIterations per step at dt = 1/60: {}.",
+            iteration_summary(&rows)
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\n## Static sag\n\nEach method settled for 10 s at dt = 1/60 s, against the true \
+         equilibrium (the potential minimised directly by Newton's method with a line search). \
+         A cell reads the largest distance (m) of a particle from it, and that as a fraction of \
+         the equilibrium's largest sag.\n"
+    );
+    let _ = write!(s, "| scene | sag (m) |");
+    for l in &labels {
+        let _ = write!(s, " {l} |");
+    }
+    let _ = write!(s, "\n| --- | ---: |");
+    for _ in &labels {
+        let _ = write!(s, " ---: |");
+    }
+    s.push('\n');
+    let mut scenes: Vec<&str> = report.sags.iter().map(|r| r.scene.as_str()).collect();
+    scenes.dedup();
+    for scene in scenes {
+        let mine: Vec<&Sag> = report.sags.iter().filter(|r| r.scene == scene).collect();
+        let sag = mine.first().map_or(0.0, |r| r.sag);
+        let _ = write!(s, "| {scene} | {sag:.3e} |");
+        for l in &labels {
+            let cell = mine
+                .iter()
+                .find(|r| &r.method == l)
+                .map(|r| match r.distance {
+                    Some(d) => format!("{d:.1e} ({:.1} %)", 100.0 * d / sag.max(1e-300)),
+                    None => "unstable".into(),
+                })
+                .unwrap_or_default();
+            let _ = write!(s, " {cell} |");
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// "implicit-euler: 1 Newton, 47 CG; ..." for the iterative methods at dt = 1/60.
+fn iteration_summary(rows: &[&LargeRow]) -> String {
+    let mut parts = vec![];
+    for r in rows.iter().filter(|r| r.row.dt == 1.0 / 60.0) {
+        let st = &r.stats;
+        let text = if let (Some(n), Some(cg)) =
+            (st.newton_iterations_per_step, st.cg_iterations_per_step)
+        {
+            format!("{n:.0} Newton, {cg:.0} CG")
+        } else if let Some(it) = st.projective_iterations_per_step {
+            format!(
+                "{it:.0} local/global, {} factorisation(s) of {} nonzeros in {}",
+                st.factorizations,
+                st.factor_nonzeros,
+                fmt_time(st.factorization_seconds)
+            )
+        } else if let Some(sw) = st.xpbd_sweeps_per_step {
+            format!("{sw:.0} sweeps over {} colours", st.xpbd_colours)
+        } else {
+            continue;
+        };
+        parts.push(format!("{} {text}", r.row.integrator));
+    }
+    parts.join("; ")
+}
