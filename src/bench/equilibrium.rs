@@ -11,8 +11,8 @@ use bevy::math::DVec2;
 
 /// The forces −∇U at x: body forces plus springs, zero on fixed particles.
 fn forces(s: &Solver, x: &[DVec2], gravity: DVec2, out: &mut [DVec2]) {
-    for i in 0..x.len() {
-        out[i] = if s.inv_mass()[i] != 0.0 {
+    for (i, o) in out.iter_mut().enumerate().take(x.len()) {
+        *o = if s.inv_mass()[i] != 0.0 {
             gravity * s.mass()[i] + s.external()[i]
         } else {
             DVec2::ZERO
@@ -27,8 +27,8 @@ fn forces(s: &Solver, x: &[DVec2], gravity: DVec2, out: &mut [DVec2]) {
 
 fn potential(s: &Solver, x: &[DVec2], gravity: DVec2) -> f64 {
     let mut u = 0.0;
-    for i in 0..x.len() {
-        u -= (gravity * s.mass()[i] + s.external()[i]).dot(x[i]);
+    for (i, p) in x.iter().enumerate() {
+        u -= (gravity * s.mass()[i] + s.external()[i]).dot(*p);
     }
     for sp in s.springs() {
         let PackedSpring { a, b, rest, k } = *sp;
@@ -88,7 +88,7 @@ pub fn equilibrium(s: &Solver, start: &[DVec2], gravity: DVec2) -> (Vec<DVec2>, 
             }
             apply(&p, &mut hp);
             let php = dot(&p, &hp);
-            if !(php > 0.0) {
+            if php.is_nan() || php <= 0.0 {
                 break;
             }
             let alpha = r2 / php;
