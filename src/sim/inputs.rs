@@ -129,6 +129,14 @@ fn check_spring(
     None
 }
 
+/// The masses and springs added or changed since the last check (a filtered scan: it reads
+/// change ticks, not components, for the rest).
+#[derive(bevy::ecs::system::SystemParam)]
+pub struct ChangedInputs<'w, 's> {
+    masses: Query<'w, 's, (Entity, &'static Mass), Changed<Mass>>,
+    springs: Query<'w, 's, (Entity, &'static Spring), Changed<Spring>>,
+}
+
 /// Run condition: the inputs passed the last check.
 pub fn inputs_valid(status: Res<SimStatus>) -> bool {
     !matches!(*status, SimStatus::InvalidInput(_))
@@ -147,6 +155,7 @@ pub fn check_inputs(
     masses: Query<(Entity, Ref<Mass>)>,
     springs: Query<(Entity, Ref<Spring>)>,
     particles: Query<(), With<Particle>>,
+    changed: ChangedInputs,
 ) {
     let is_particle = |e: Entity| particles.contains(e);
     let standing = match *status {
@@ -165,17 +174,12 @@ pub fn check_inputs(
     let found = still
         .or_else(|| check_params(&params))
         .or_else(|| check_settings(&plan, &cg))
+        .or_else(|| changed.masses.iter().find_map(|(e, m)| check_mass(e, m)))
         .or_else(|| {
-            masses
+            changed
+                .springs
                 .iter()
-                .filter(|(_, m)| m.is_changed())
-                .find_map(|(e, m)| check_mass(e, &m))
-        })
-        .or_else(|| {
-            springs
-                .iter()
-                .filter(|(_, s)| s.is_changed())
-                .find_map(|(e, s)| check_spring(e, &s, is_particle))
+                .find_map(|(e, s)| check_spring(e, s, is_particle))
         });
     match found {
         Some(p) => {

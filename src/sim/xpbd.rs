@@ -23,14 +23,24 @@ use super::parallel::SolverThreads;
 use super::solver::Solver;
 use bevy::math::DVec2;
 
-/// A constraint in colour order: the packed spring's ends, rest length and compliance.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// A constraint in colour order: the packed spring's ends, rest length and compliance, and the
+/// coefficients of its projection at the current substep size (so that the sweep reads no
+/// inverse masses and divides once): with den = w_a + w_b + α̃,
+/// Δλ = g/den and x_a += w_a Δλ n = (w_a/den) g n, for g = −C − α̃λ.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 struct Constraint {
     a: u32,
     b: u32,
     rest: f64,
     /// α = 1/k (0 for an infinitely stiff spring).
     compliance: f64,
+    /// α̃ = α/hₛ².
+    alpha: f64,
+    /// 1/den (0 when both ends are fixed and the spring is rigid: nothing moves).
+    inv_den: f64,
+    /// w_a/den and w_b/den.
+    ca: f64,
+    cb: f64,
 }
 
 /// The colouring and buffers, kept from step to step.
@@ -38,6 +48,8 @@ struct Constraint {
 pub struct Xpbd {
     /// The [`Solver::revision`] the colouring is for.
     revision: Option<u64>,
+    /// The revision and substep size (bits) the coefficients are for.
+    coefficients: Option<(u64, u64)>,
     /// Constraints grouped by colour.
     constraints: Vec<Constraint>,
     /// Start of each colour in `constraints`, and the end.
@@ -107,15 +119,7 @@ impl Xpbd {
         }
         self.colour_starts = counts.clone();
         let mut at = counts;
-        self.constraints = vec![
-            Constraint {
-                a: 0,
-                b: 0,
-                rest: 0.0,
-                compliance: 0.0
-            };
-            s.springs.len()
-        ];
+        self.constraints = vec![Constraint::default(); s.springs.len()];
         for (sp, &c) in s.springs.iter().zip(&colour_of) {
             let slot = &mut at[c as usize];
             self.constraints[*slot] = Constraint {
@@ -123,11 +127,32 @@ impl Xpbd {
                 b: sp.b,
                 rest: sp.rest,
                 compliance: 1.0 / sp.k,
+                ..Default::default()
             };
             *slot += 1;
         }
         self.lambda = vec![0.0; s.springs.len()];
         self.revision = Some(s.revision);
+        self.coefficients = None;
+    }
+
+    /// The projections' coefficients for substeps of `hs` (see [`Constraint`]).
+    fn prepare(&mut self, s: &Solver, hs: f64) {
+        let key = (s.revision, hs.to_bits());
+        if self.coefficients == Some(key) {
+            return;
+        }
+        let inv_h2 = 1.0 / (hs * hs);
+        let w = &s.inv_mass;
+        for c in &mut self.constraints {
+            let (wa, wb) = (w[c.a as usize], w[c.b as usize]);
+            c.alpha = c.compliance * inv_h2;
+            let den = wa + wb + c.alpha;
+            c.inv_den = if den > 0.0 { 1.0 / den } else { 0.0 };
+            c.ca = wa * c.inv_den;
+            c.cb = wb * c.inv_den;
+        }
+        self.coefficients = Some(key);
     }
 }
 
@@ -166,16 +191,11 @@ impl Positions {
     }
 }
 
-/// Projects a run of constraints of one colour.
-fn project(constraints: &[Constraint], lambda: &mut [f64], x: Positions, w: &[f64], inv_h2: f64) {
+/// Projects a run of constraints of one colour. `MULTIPLIERS`: keep λ across sweeps (more
+/// than one sweep a substep); with one sweep λ is 0 at the projection and is never read again.
+fn project<const MULTIPLIERS: bool>(constraints: &[Constraint], lambda: &mut [f64], x: Positions) {
     for (c, lambda) in constraints.iter().zip(lambda) {
         let (a, b) = (c.a as usize, c.b as usize);
-        let (wa, wb) = (w[a], w[b]);
-        let alpha = c.compliance * inv_h2;
-        let denominator = wa + wb + alpha;
-        if denominator == 0.0 {
-            continue; // both ends fixed and rigid
-        }
         // SAFETY: a and b belong to this constraint alone within the colour.
         let (xa, xb) = unsafe { (x.get(a), x.get(b)) };
         let l = xa - xb;
@@ -183,13 +203,16 @@ fn project(constraints: &[Constraint], lambda: &mut [f64], x: Positions, w: &[f6
         if len == 0.0 {
             continue; // no direction (the spring force kernel exerts none either)
         }
-        let n = l / len;
-        let dl = (-(len - c.rest) - alpha * *lambda) / denominator;
-        *lambda += dl;
+        let mut g = c.rest - len; // −C
+        if MULTIPLIERS {
+            g -= c.alpha * *lambda;
+            *lambda += g * c.inv_den;
+        }
+        let s = g / len;
         // SAFETY: as above.
         unsafe {
-            x.set(a, xa + n * (wa * dl));
-            x.set(b, xb - n * (wb * dl));
+            x.set(a, xa + l * (c.ca * s));
+            x.set(b, xb - l * (c.cb * s));
         }
     }
 }
@@ -206,52 +229,83 @@ pub fn step(s: &mut Solver, dt: f64, substeps: u32, sweeps: u32, threads: &Solve
     xp.x.clear();
     xp.x.extend_from_slice(&s.x);
     xp.prev.resize(n, DVec2::ZERO);
-    let hs = dt / substeps.max(1) as f64;
-    let (inv_hs, inv_h2) = (1.0 / hs, 1.0 / (hs * hs));
-    for _ in 0..substeps {
-        let data = (
-            &mut xp.x[..],
-            &mut xp.prev[..],
-            &mut s.v[..],
-            &s.f[..],
-            &s.inv_mass[..],
-        );
-        threads.each(springs, data, |(x, prev, v, f, w)| {
-            for i in 0..x.len() {
-                v[i] += f[i] * (hs * w[i]);
-                let start = x[i];
-                prev[i] = start;
-                x[i] = start + v[i] * hs;
-            }
-        });
-        xp.lambda.iter_mut().for_each(|l| *l = 0.0);
+    let substeps = substeps.max(1);
+    let hs = dt / substeps as f64;
+    let inv_hs = 1.0 / hs;
+    xp.prepare(s, hs);
+    // The first substep's prediction: v += hₛ f/m, p = x, x += hₛ v.
+    let data = (
+        &mut xp.x[..],
+        &mut xp.prev[..],
+        &mut s.v[..],
+        &s.f[..],
+        &s.inv_mass[..],
+    );
+    threads.each(springs, data, |(x, prev, v, f, w)| {
+        for i in 0..x.len() {
+            v[i] += f[i] * (hs * w[i]);
+            let start = x[i];
+            prev[i] = start;
+            x[i] = start + v[i] * hs;
+        }
+    });
+    for substep in 0..substeps {
         let positions = Positions {
             ptr: xp.x.as_mut_ptr(),
             len: n,
         };
+        if sweeps > 1 {
+            xp.lambda.iter_mut().for_each(|l| *l = 0.0);
+        }
         for _ in 0..sweeps {
             for colour in xp.colour_starts.windows(2) {
                 let range = colour[0]..colour[1];
                 let data = (&xp.constraints[range.clone()], &mut xp.lambda[range]);
-                threads.each(springs, data, |(c, l)| {
-                    project(c, l, positions, &s.inv_mass, inv_h2)
-                });
-            }
-        }
-        let data = (&mut s.v[..], &xp.x[..], &xp.prev[..], &s.inv_mass[..]);
-        threads.each(springs, data, |(v, x, prev, w)| {
-            for i in 0..v.len() {
-                if w[i] != 0.0 {
-                    v[i] = (x[i] - prev[i]) * inv_hs;
+                if sweeps > 1 {
+                    threads.each(springs, data, |(c, l)| project::<true>(c, l, positions));
+                } else {
+                    threads.each(springs, data, |(c, l)| project::<false>(c, l, positions));
                 }
             }
-        });
+        }
+        if substep + 1 < substeps {
+            // This substep's velocity, v = (x − p)/hₛ, fused with the next one's prediction.
+            let data = (
+                &mut xp.x[..],
+                &mut xp.prev[..],
+                &mut s.v[..],
+                &s.f[..],
+                &s.inv_mass[..],
+            );
+            threads.each(springs, data, |(x, prev, v, f, w)| {
+                for i in 0..x.len() {
+                    let end = x[i];
+                    if w[i] != 0.0 {
+                        v[i] = (end - prev[i]) * inv_hs;
+                    }
+                    v[i] += f[i] * (hs * w[i]);
+                    prev[i] = end;
+                    x[i] = end + v[i] * hs;
+                }
+            });
+        }
     }
+    // The last substep's velocity, and the drift that carries x0 to the step's end.
     let inv_h = 1.0 / dt;
-    let data = (&mut s.drift[..], &xp.x[..], &s.x[..]);
-    threads.each(springs, data, |(u, x_end, x0)| {
-        for i in 0..u.len() {
-            u[i] = (x_end[i] - x0[i]) * inv_h;
+    let data = (
+        &mut s.v[..],
+        &mut s.drift[..],
+        &xp.x[..],
+        &xp.prev[..],
+        &s.x[..],
+        &s.inv_mass[..],
+    );
+    threads.each(springs, data, |(v, u, x, prev, x0, w)| {
+        for i in 0..v.len() {
+            if w[i] != 0.0 {
+                v[i] = (x[i] - prev[i]) * inv_hs;
+            }
+            u[i] = (x[i] - x0[i]) * inv_h;
         }
     });
     xp.sweeps += substeps as u64 * sweeps as u64;
