@@ -64,26 +64,21 @@ type Springs<'w, 's> = Query<
     Without<Particle>,
 >;
 
+/// A particle's value edits: what the sync patches in place.
+type ParticleEdited = Or<(
+    Changed<Position>,
+    Changed<Velocity>,
+    Changed<Mass>,
+    Changed<ExternalForce>,
+    Added<Kinematic>,
+)>;
+
 /// What changed since the last sync, found by filtered scans (they read change ticks, not
 /// components, for the entities that did not change): a tick of a big scene with nothing
 /// edited costs about one pass over the ticks.
 #[derive(SystemParam)]
 pub struct Edits<'w, 's> {
-    particles: Query<
-        'w,
-        's,
-        Entity,
-        (
-            With<Particle>,
-            Or<(
-                Changed<Position>,
-                Changed<Velocity>,
-                Changed<Mass>,
-                Changed<ExternalForce>,
-                Added<Kinematic>,
-            )>,
-        ),
-    >,
+    particles: Query<'w, 's, Entity, (With<Particle>, ParticleEdited)>,
     released: RemovedComponents<'w, 's, Kinematic>,
     held: Query<'w, 's, (), (With<Particle>, With<Kinematic>)>,
     springs: Query<'w, 's, Entity, (Changed<Spring>, Without<Particle>)>,
