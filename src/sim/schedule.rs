@@ -438,6 +438,7 @@ fn xpbd(
         params.dt,
         it.xpbd_substeps,
         it.xpbd_sweeps,
+        params.ground,
         &threads,
     );
     n.integrate += 1;

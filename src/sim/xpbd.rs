@@ -4,6 +4,7 @@
 //! α = 1/k. A step of size h is n substeps of size hₛ = h/n; each substep is
 //!
 //! 1. v += hₛ f_body/m, p = x, x += hₛ v (free particles; a held one moves with its velocity),
+//!    and a free particle that x puts below the ground is put on it,
 //! 2. λ = 0, then `sweeps` Gauss-Seidel sweeps over the constraints, colour by colour:
 //!    α̃ = α/hₛ², Δλ = (−C − α̃ λ)/(w_a + w_b + α̃), λ += Δλ, x_a += w_a Δλ n, x_b −= w_b Δλ n,
 //!    with n = (x_a − x_b)/|x_a − x_b| and w = 1/m (0 for pinned and held particles),
@@ -191,6 +192,17 @@ impl Positions {
     }
 }
 
+/// The ground as a position constraint of each substep's prediction (as position-based methods
+/// treat contact): a free particle predicted below it is put on it, so the substep's velocity
+/// (x − p)/hₛ carries it no further down. The schedule's ground pass then finds nothing to do.
+#[inline(always)]
+fn on_ground(mut x: DVec2, w: f64, ground: f64) -> DVec2 {
+    if x.y < ground && w != 0.0 {
+        x.y = ground;
+    }
+    x
+}
+
 /// Projects a run of constraints of one colour. `MULTIPLIERS`: keep λ across sweeps (more
 /// than one sweep a substep); with one sweep λ is 0 at the projection and is never read again.
 fn project<const MULTIPLIERS: bool>(constraints: &[Constraint], lambda: &mut [f64], x: Positions) {
@@ -219,7 +231,14 @@ fn project<const MULTIPLIERS: bool>(constraints: &[Constraint], lambda: &mut [f6
 
 /// One XPBD step (see the module docs): sets v to the end velocity and the drift to the mean
 /// velocity over the step. `s.f` holds the body forces.
-pub fn step(s: &mut Solver, dt: f64, substeps: u32, sweeps: u32, threads: &SolverThreads) {
+pub fn step(
+    s: &mut Solver,
+    dt: f64,
+    substeps: u32,
+    sweeps: u32,
+    ground: Option<f64>,
+    threads: &SolverThreads,
+) {
     let mut xp = std::mem::take(&mut s.xpbd);
     if xp.revision != Some(s.revision) || xp.constraints.len() != s.springs.len() {
         xp.colour(s);
@@ -232,6 +251,7 @@ pub fn step(s: &mut Solver, dt: f64, substeps: u32, sweeps: u32, threads: &Solve
     let substeps = substeps.max(1);
     let hs = dt / substeps as f64;
     let inv_hs = 1.0 / hs;
+    let floor = ground.unwrap_or(f64::NEG_INFINITY);
     xp.prepare(s, hs);
     // The first substep's prediction: v += hₛ f/m, p = x, x += hₛ v.
     let data = (
@@ -246,7 +266,7 @@ pub fn step(s: &mut Solver, dt: f64, substeps: u32, sweeps: u32, threads: &Solve
             v[i] += f[i] * (hs * w[i]);
             let start = x[i];
             prev[i] = start;
-            x[i] = start + v[i] * hs;
+            x[i] = on_ground(start + v[i] * hs, w[i], floor);
         }
     });
     for substep in 0..substeps {
@@ -285,7 +305,7 @@ pub fn step(s: &mut Solver, dt: f64, substeps: u32, sweeps: u32, threads: &Solve
                     }
                     v[i] += f[i] * (hs * w[i]);
                     prev[i] = end;
-                    x[i] = end + v[i] * hs;
+                    x[i] = on_ground(end + v[i] * hs, w[i], floor);
                 }
             });
         }
@@ -351,7 +371,7 @@ mod tests {
                 .collect();
             let mut worst: f64 = 0.0;
             for _ in 0..120 {
-                step(&mut s, dt, 20, 200, &threads);
+                step(&mut s, dt, 20, 200, None, &threads);
                 for i in 0..s.x.len() {
                     s.x[i] += s.drift[i] * dt;
                 }
