@@ -153,12 +153,27 @@ pub struct Sag {
     pub sag: f64,
 }
 
+/// A run for the performance targets: a method on a big cloth at dt = 1/60 s.
+#[derive(Debug, Clone)]
+pub struct TargetRow {
+    /// The cloth.
+    pub scene: String,
+    /// The method's label.
+    pub method: String,
+    /// Wall time per step, s (ECS sync included).
+    pub step_s: f64,
+    /// Its error against the reference over 0.5 s, m.
+    pub error: f64,
+}
+
 /// The study's results.
 pub struct Report {
     /// Every run.
     pub rows: Vec<LargeRow>,
     /// The static sags.
     pub sags: Vec<Sag>,
+    /// The target runs (64² and 256² at dt = 1/60 s).
+    pub targets: Vec<TargetRow>,
     /// How each reference was obtained and how converged it is.
     pub notes: Vec<String>,
 }
@@ -213,7 +228,61 @@ pub fn run(problems: &[Problem], mut progress: impl FnMut(&str)) -> Result<Repor
         }
         sags.extend(static_sags(p, &mut progress)?);
     }
-    Ok(Report { rows, sags, notes })
+    let targets = target_runs(&mut notes, &mut progress)?;
+    Ok(Report {
+        rows,
+        sags,
+        targets,
+        notes,
+    })
+}
+
+/// The performance targets' scenes and methods: the 64² and 256² cloths at dt = 1/60 s over
+/// 0.5 s (30 steps), XPBD, projective dynamics and implicit Euler at their defaults, each with
+/// its error against RK4 at 1e-4 s.
+fn target_runs(
+    notes: &mut Vec<String>,
+    progress: &mut impl FnMut(&str),
+) -> Result<Vec<TargetRow>, String> {
+    let (t_end, dt) = (0.5, 1.0 / 60.0);
+    let mut out = vec![];
+    let d = Iterations::default();
+    let rk4 = Method {
+        label: "rk4".into(),
+        integrator: Integrator::Rk4,
+        iterations: d,
+    };
+    for (name, path) in [
+        ("cloth64", "assets/scenes/bench/cloth64.ron"),
+        ("cloth256", "assets/scenes/bench/cloth256.ron"),
+    ] {
+        let cloth = scene(path)?;
+        progress(&format!("targets: {name} reference rk4 at dt = 1e-4"));
+        let reference = trajectory::run(&with(&cloth, &rk4, 1e-4), t_end, CHECKPOINTS)?;
+        notes.push(format!(
+            "targets, {name}: reference = rk4 at dt = 1e-4 s over {t_end} s."
+        ));
+        for integrator in [
+            Integrator::Xpbd,
+            Integrator::ProjectiveDynamics,
+            Integrator::ImplicitEuler,
+        ] {
+            let m = Method {
+                label: integrator.cli_name().into(),
+                integrator,
+                iterations: d,
+            };
+            progress(&format!("targets: {name} {}", m.label));
+            let t = trajectory::run(&with(&cloth, &m, dt), t_end, CHECKPOINTS)?;
+            out.push(TargetRow {
+                scene: name.into(),
+                method: m.label,
+                step_s: t.wall_s / t.steps.max(1) as f64,
+                error: max_position_error(&t, &reference.checkpoints),
+            });
+        }
+    }
+    Ok(out)
 }
 
 /// Each method settled for 10 s at dt = 1/60 s, against the equilibrium found by minimising
@@ -359,6 +428,23 @@ pub fn markdown(report: &Report, machine: &str, command: &str) -> String {
             s,
             "\nIterations per step at dt = 1/60: {}.",
             iteration_summary(&rows)
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\n## Targets: the 64² and 256² cloths at dt = 1/60 s\n\nWall time per step (ECS sync \
+         included) over 0.5 s (30 steps) from rest, and the error that buys against RK4 at \
+         1e-4 s (largest distance over 10 checkpoints).\n\n| cloth | method | time per step | \
+         error (m) |\n| --- | --- | ---: | ---: |"
+    );
+    for t in &report.targets {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {:.1e} |",
+            t.scene,
+            t.method,
+            fmt_time(t.step_s),
+            t.error
         );
     }
     let _ = writeln!(
