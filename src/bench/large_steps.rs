@@ -212,16 +212,7 @@ pub fn run(problems: &[Problem], mut progress: impl FnMut(&str)) -> Result<Repor
                 let t = trajectory::run(&with(&p.scene, &m, dt), T_END, CHECKPOINTS)?;
                 let error = max_position_error(&t, &reference.checkpoints);
                 rows.push(LargeRow {
-                    row: Row {
-                        scene: p.name.to_string(),
-                        integrator: m.label.clone(),
-                        dt,
-                        steps: t.steps,
-                        wall_s: t.wall_s,
-                        error,
-                        stable: t.finite && error < UNSTABLE_ERROR,
-                        cg_iterations_per_step: t.cg_iterations_per_step,
-                    },
+                    row: Row::of(p.name, &m.label, dt, &t, error),
                     stats: t.stats,
                 });
             }

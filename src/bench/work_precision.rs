@@ -42,6 +42,22 @@ pub struct Row {
     pub cg_iterations_per_step: f64,
 }
 
+impl Row {
+    /// The row of a run of `label` at `dt` on `scene`, with its error against the reference.
+    pub fn of(scene: &str, label: &str, dt: f64, t: &Trajectory, error: f64) -> Row {
+        Row {
+            scene: scene.to_string(),
+            integrator: label.to_string(),
+            dt,
+            steps: t.steps,
+            wall_s: t.wall_s,
+            error,
+            stable: t.finite && error < UNSTABLE_ERROR,
+            cg_iterations_per_step: t.cg_iterations_per_step,
+        }
+    }
+}
+
 /// A problem of the study.
 pub struct Problem {
     /// The problem's name (`oscillator`, `cloth32`).
@@ -174,16 +190,7 @@ pub fn run(problems: &[Problem], mut progress: impl FnMut(&str)) -> Result<Repor
                 let t: Trajectory =
                     trajectory::run(&with(&p.scene, integrator, dt), p.t_end, CHECKPOINTS)?;
                 let error = max_position_error(&t, &reference);
-                rows.push(Row {
-                    scene: p.name.to_string(),
-                    integrator: integrator.cli_name().to_string(),
-                    dt,
-                    steps: t.steps,
-                    wall_s: t.wall_s,
-                    error,
-                    stable: t.finite && error < UNSTABLE_ERROR,
-                    cg_iterations_per_step: t.cg_iterations_per_step,
-                });
+                rows.push(Row::of(p.name, integrator.cli_name(), dt, &t, error));
             }
         }
     }

@@ -89,13 +89,6 @@ impl std::fmt::Debug for Projective {
     }
 }
 
-impl Clone for Projective {
-    /// A clone starts without the factorisation (it is redone at its first step).
-    fn clone(&self) -> Self {
-        Projective::default()
-    }
-}
-
 /// The local step's right-hand side: h² k_s d_s to end a, −h² k_s d_s to end b.
 struct LocalStep<'z> {
     z: &'z [DVec2],
