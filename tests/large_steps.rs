@@ -329,3 +329,30 @@ fn xpbd_on_two_threads_equals_one_bit_for_bit() {
     let (one, two) = (cloth(1), cloth(2));
     assert!(one.iter().zip(&two).all(|(a, b)| a == b));
 }
+
+/// Degenerate scenes step under every integrator without a panic: nothing at all, one pinned
+/// particle (no free row for projective dynamics' matrix), a pinned pair joined by a spring
+/// (a constraint with both ends fixed), and a free particle with no springs.
+#[test]
+fn degenerate_scenes_step_under_every_integrator() {
+    let dt = 1.0 / 60.0;
+    for integrator in Integrator::ALL {
+        let mut scenes = vec![bare_scene(integrator, dt)];
+        let mut one = bare_scene(integrator, dt);
+        one.particles = vec![particle(0.5, 0.5, true)];
+        scenes.push(one.clone());
+        let mut pair = one.clone();
+        pair.particles.push(particle(0.6, 0.5, true));
+        pair.springs = vec![spring(0, 1, 1e4, 0.1)];
+        scenes.push(pair);
+        let mut free = bare_scene(integrator, dt);
+        free.gravity = (0.0, -9.8);
+        free.particles = vec![particle(0.5, 0.5, false)];
+        scenes.push(free);
+        for scene in scenes {
+            let mut app = app_with(scene);
+            common::step(&mut app, 3);
+            assert!(solver(&app).state_is_finite(), "{integrator}");
+        }
+    }
+}
