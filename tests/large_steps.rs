@@ -330,9 +330,10 @@ fn xpbd_on_two_threads_equals_one_bit_for_bit() {
     assert!(one.iter().zip(&two).all(|(a, b)| a == b));
 }
 
-/// Degenerate scenes step under every integrator without a panic: nothing at all, one pinned
-/// particle (no free row for projective dynamics' matrix), a pinned pair joined by a spring
-/// (a constraint with both ends fixed), and a free particle with no springs.
+/// Degenerate scenes step under every integrator without a panic or a NaN: nothing at all, one
+/// pinned particle (no free row for projective dynamics' matrix), a pinned pair joined by a
+/// spring (a constraint with both ends fixed), a free particle with no springs, and a spring of
+/// stiffness 0 (XPBD's infinite compliance), with one XPBD sweep and with several.
 #[test]
 fn degenerate_scenes_step_under_every_integrator() {
     let dt = 1.0 / 60.0;
@@ -349,10 +350,28 @@ fn degenerate_scenes_step_under_every_integrator() {
         free.gravity = (0.0, -9.8);
         free.particles = vec![particle(0.5, 0.5, false)];
         scenes.push(free);
+        // A spring of stiffness 0 between free particles (infinite compliance for XPBD).
+        let mut slack = bare_scene(integrator, dt);
+        slack.gravity = (0.0, -9.8);
+        slack.particles = vec![particle(0.5, 0.5, false), particle(0.6, 0.5, false)];
+        slack.springs = vec![spring(0, 1, 0.0, 0.05)];
+        scenes.push(slack);
         for scene in scenes {
-            let mut app = app_with(scene);
-            common::step(&mut app, 3);
-            assert!(solver(&app).state_is_finite(), "{integrator}");
+            for sweeps in [1, 5] {
+                let mut app = app_with(scene.clone());
+                set_iterations(
+                    &mut app,
+                    Iterations {
+                        xpbd_sweeps: sweeps,
+                        ..Default::default()
+                    },
+                );
+                common::step(&mut app, 3);
+                assert!(
+                    solver(&app).state_is_finite(),
+                    "{integrator}, {sweeps} sweeps"
+                );
+            }
         }
     }
 }

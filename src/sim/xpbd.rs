@@ -156,7 +156,13 @@ impl Xpbd {
             let (wa, wb) = (w[c.a as usize], w[c.b as usize]);
             m.alpha = m.compliance * inv_h2;
             let den = wa + wb + m.alpha;
-            m.inv_den = if den > 0.0 { 1.0 / den } else { 0.0 };
+            // A spring of stiffness 0 (infinite compliance) pulls on nothing; its α̃ is kept
+            // finite so that α̃λ cannot become ∞·0.
+            let inert = !m.alpha.is_finite() || den <= 0.0;
+            if inert {
+                m.alpha = 0.0;
+            }
+            m.inv_den = if inert { 0.0 } else { 1.0 / den };
             c.ca = wa * m.inv_den;
             c.cb = wb * m.inv_den;
         }
