@@ -2,7 +2,8 @@
 //! (resources), the schedule (public system sets), and the read-only packed [`Solver`].
 //!
 //! The solver's machinery (kernels, the AVX pass, the stiffness blocks, the thread splits, the
-//! integrators' scratch buffers, the ECS sync) is private to the crate: it holds invariants
+//! integrators' scratch buffers, projective dynamics' factor, XPBD's colouring, the ECS sync) is
+//! private to the crate: it holds invariants
 //! (array lengths, index order, thread-part boundaries) that only the sync maintains, and it
 //! changes from release to release. Users change the simulation through components and
 //! resources, and read it through [`Solver`]'s accessors.
