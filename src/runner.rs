@@ -65,7 +65,7 @@ impl Overrides {
             ("--xpbd-iterations", self.xpbd_iterations),
         ];
         for (flag, n) in counts {
-            if let Some(n) = n.filter(|n| !(1..=sim::Iterations::MAX).contains(n)) {
+            if let Some(n) = n.filter(|&n| !sim::Iterations::allowed(n)) {
                 return Err(format!("{flag} {}, got {n}", sim::Iterations::RULE));
             }
         }
@@ -227,6 +227,7 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
     let wall_s = start.elapsed().as_secs_f64();
 
     let solver = world.resource::<Solver>();
+    let solve = solver.solve_stats();
     let energy_end = solver.energy(params.gravity).total();
     let status = *world.resource::<SimStatus>();
     let clock = *world.resource::<SimClock>();
@@ -262,9 +263,9 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
         omega_max_bound: stability.omega_bound,
         finite: blowup_step.is_none() && solver.state_is_finite(),
         springs_torn: world.resource::<sim::Tearing>().torn,
-        cg_iterations_per_step: solver.scratch.cg_iterations_per_step(),
+        cg_iterations_per_step: solve.cg_iterations_per_step,
         iterations: params.iterations,
-        solve: solver.solve_stats(),
+        solve,
         pass_seconds: world.get_resource::<sim::PassTimes>().cloned(),
         blowup_step,
     };

@@ -13,7 +13,7 @@
 
 use super::equilibrium::equilibrium;
 use super::trajectory::{self, max_position_error};
-use super::work_precision::{Row, UNSTABLE_ERROR, fmt_time};
+use super::work_precision::{Row, UNSTABLE_ERROR, fmt_time, table_header};
 use crate::scene::{LoadedScene, Scene, presets};
 use crate::sim::{self, Integrator, Iterations, SolveStats};
 use bevy::math::DVec2;
@@ -388,15 +388,7 @@ pub fn markdown(report: &Report, machine: &str, command: &str) -> String {
             s,
             "\n## {scene}\n\n![large steps {scene}](large-steps-{scene}.png)\n"
         );
-        let _ = write!(s, "| dt (s) |");
-        for l in &labels {
-            let _ = write!(s, " {l} |");
-        }
-        let _ = write!(s, "\n| ---: |");
-        for _ in &labels {
-            let _ = write!(s, " ---: |");
-        }
-        s.push('\n');
+        table_header(&mut s, &[("dt (s)", "---:")], &labels);
         for dt in DTS {
             let _ = write!(s, "| 1/{:.0} |", 1.0 / dt);
             for l in &labels {
@@ -445,15 +437,7 @@ pub fn markdown(report: &Report, machine: &str, command: &str) -> String {
          A cell reads the largest distance (m) of a particle from it, and that as a fraction of \
          the equilibrium's largest sag.\n"
     );
-    let _ = write!(s, "| scene | sag (m) |");
-    for l in &labels {
-        let _ = write!(s, " {l} |");
-    }
-    let _ = write!(s, "\n| --- | ---: |");
-    for _ in &labels {
-        let _ = write!(s, " ---: |");
-    }
-    s.push('\n');
+    table_header(&mut s, &[("scene", "---"), ("sag (m)", "---:")], &labels);
     let mut scenes: Vec<&str> = report.sags.iter().map(|r| r.scene.as_str()).collect();
     scenes.dedup();
     for scene in scenes {

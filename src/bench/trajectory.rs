@@ -18,8 +18,6 @@ pub struct Trajectory {
     pub steps: u64,
     /// Whether every step stayed finite.
     pub finite: bool,
-    /// Mean conjugate-gradient iterations per step (implicit Euler), else 0.
-    pub cg_iterations_per_step: f64,
     /// What the iterative methods did.
     pub stats: crate::sim::SolveStats,
 }
@@ -41,7 +39,6 @@ pub fn run(scene: &Scene, t_end: f64, checkpoints: u64) -> Result<Trajectory, St
         wall_s: 0.0,
         steps: 0,
         finite: true,
-        cg_iterations_per_step: 0.0,
         stats: Default::default(),
     };
     for _ in 0..checkpoints {
@@ -56,11 +53,6 @@ pub fn run(scene: &Scene, t_end: f64, checkpoints: u64) -> Result<Trajectory, St
         }
     }
     out.stats = world.resource::<Solver>().solve_stats();
-    out.cg_iterations_per_step = world
-        .resource::<Solver>()
-        .scratch
-        .cg_iterations_per_step()
-        .unwrap_or(0.0);
     Ok(out)
 }
 

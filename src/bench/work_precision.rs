@@ -53,7 +53,7 @@ impl Row {
             wall_s: t.wall_s,
             error,
             stable: t.finite && error < UNSTABLE_ERROR,
-            cg_iterations_per_step: t.cg_iterations_per_step,
+            cg_iterations_per_step: t.stats.cg_iterations_per_step.unwrap_or(0.0),
         }
     }
 }
@@ -242,15 +242,7 @@ pub fn markdown(report: &Report, command: &str) -> String {
             s,
             "\n## {scene}\n\n![work-precision {scene}](work-precision-{scene}.png)\n"
         );
-        let _ = write!(s, "| dt (s) |");
-        for i in Integrator::ALL {
-            let _ = write!(s, " {i} |");
-        }
-        let _ = write!(s, "\n| ---: |");
-        for _ in Integrator::ALL {
-            let _ = write!(s, " ---: |");
-        }
-        s.push('\n');
+        table_header(&mut s, &[("dt (s)", "---:")], Integrator::ALL);
         for dt in dts {
             let _ = write!(s, "| {dt:.3e} |");
             for i in Integrator::ALL {
@@ -278,6 +270,30 @@ pub fn markdown(report: &Report, command: &str) -> String {
         }
     }
     s
+}
+
+/// A markdown table's header: the leading columns as (title, alignment rule), then one
+/// right-aligned column per label.
+pub fn table_header<L: std::fmt::Display>(
+    s: &mut String,
+    lead: &[(&str, &str)],
+    labels: impl IntoIterator<Item = L> + Clone,
+) {
+    s.push('|');
+    for (title, _) in lead {
+        let _ = write!(s, " {title} |");
+    }
+    for l in labels.clone() {
+        let _ = write!(s, " {l} |");
+    }
+    s.push_str("\n|");
+    for (_, rule) in lead {
+        let _ = write!(s, " {rule} |");
+    }
+    for _ in labels {
+        s.push_str(" ---: |");
+    }
+    s.push('\n');
 }
 
 /// A duration for a table: µs, ms or s.

@@ -152,8 +152,8 @@ pub fn check_inputs(
     mut status: ResMut<SimStatus>,
     plan: Res<TickPlan>,
     cg: Res<CgSettings>,
-    masses: Query<(Entity, Ref<Mass>)>,
-    springs: Query<(Entity, Ref<Spring>)>,
+    masses: Query<(Entity, &Mass)>,
+    springs: Query<(Entity, &Spring)>,
     particles: Query<(), With<Particle>>,
     changed: ChangedInputs,
 ) {
@@ -164,10 +164,10 @@ pub fn check_inputs(
     };
     // The standing problem's entity (a particle's mass or a spring), if it still has one.
     let still = standing.and_then(|p| p.entity).and_then(|e| {
-        let mass = masses.get(e).ok().and_then(|(e, m)| check_mass(e, &m));
+        let mass = masses.get(e).ok().and_then(|(e, m)| check_mass(e, m));
         let spring = || {
             let (e, s) = springs.get(e).ok()?;
-            check_spring(e, &s, is_particle)
+            check_spring(e, s, is_particle)
         };
         mass.or_else(spring)
     });

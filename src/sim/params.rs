@@ -125,13 +125,19 @@ impl Iterations {
         ]
     }
 
-    /// The first count outside 1..=[`Iterations::MAX`], as (field index, value): the one check
-    /// that the scene loader, the command line and the per-tick input check share.
+    /// Whether `count` is a usable iteration count: 1..=[`Iterations::MAX`] ([`Iterations::RULE`]).
+    pub fn allowed(count: u32) -> bool {
+        (1..=Self::MAX).contains(&count)
+    }
+
+    /// The first count that is not [`Iterations::allowed`], as (field index, value): the check
+    /// that the scene loader and the per-tick input check share (the command line checks each
+    /// flag with [`Iterations::allowed`], to name the flag).
     pub fn out_of_range(&self) -> Option<(usize, u32)> {
         self.values()
             .into_iter()
             .enumerate()
-            .find(|&(_, v)| !(1..=Self::MAX).contains(&v))
+            .find(|&(_, v)| !Self::allowed(v))
     }
 }
 
