@@ -77,6 +77,26 @@ enum BenchCommand {
         #[arg(long, default_value_t = 3)]
         repeat: usize,
     },
+    /// Loading and stepping cloths of 1 M to 16 M springs: the load's phases and peak memory
+    /// per spring, and the symplectic-Euler rate against the bandwidth bound; writes CSV and
+    /// a markdown table.
+    Scale {
+        /// Directory to write into.
+        #[arg(long, default_value = "docs")]
+        out: PathBuf,
+        /// Cloth widths (particles per side; default about 1, 2, 4, 8 and 16 M springs).
+        #[arg(long, value_delimiter = ',')]
+        widths: Vec<usize>,
+        /// Thread counts to measure (default: 1 and all cores).
+        #[arg(long, value_delimiter = ',')]
+        threads: Vec<usize>,
+        /// Steps per run.
+        #[arg(long, default_value_t = 20)]
+        steps: u64,
+        /// Runs per figure (the median is reported; thread counts alternate between runs).
+        #[arg(long, default_value_t = 3)]
+        repeat: usize,
+    },
     /// Every method at real-time steps (dt = 1/30 to 1/960 s) on four scenes: error against a
     /// fine RK4 reference, wall time per simulated second, iterations, and the static sag
     /// against the true equilibrium; writes CSV, markdown and diagrams.
@@ -147,9 +167,14 @@ struct RunArgs {
     #[arg(long)]
     json: bool,
     /// Also report the wall time of each pass of the step (forces, integrate, damping,
-    /// ground, advance).
+    /// ground, advance; with the fused particle sweep, advance holds all four).
     #[arg(long)]
     profile: bool,
+    /// Run the particle passes (the Euler kick, damping, ground, the position update) as
+    /// separate systems instead of one fused sweep: the same result bit for bit, slower, and
+    /// `--profile` then times each pass.
+    #[arg(long)]
+    separate_passes: bool,
 }
 
 /// Exit codes.
@@ -174,6 +199,13 @@ fn main() -> ExitCode {
             stability(&out, &scenes, steps)
         }
         Some(Command::Bench(BenchCommand::LargeSteps { out })) => large_steps(&out),
+        Some(Command::Bench(BenchCommand::Scale {
+            out,
+            widths,
+            threads,
+            steps,
+            repeat,
+        })) => scale(&out, widths, threads, steps, repeat),
     }
 }
 
@@ -204,6 +236,7 @@ fn run(args: RunArgs) -> ExitCode {
         xpbd_iterations: args.xpbd_iterations,
         threads: args.threads,
         profile: args.profile,
+        separate_passes: args.separate_passes,
     };
     let run = match runner::run(&loaded, &overrides, duration) {
         Ok(r) => r,
@@ -334,15 +367,12 @@ fn large_steps(out: &std::path::Path) -> ExitCode {
     )
 }
 
-fn perf(out: &std::path::Path, mut threads: Vec<usize>, budget: f64, repeat: usize) -> ExitCode {
+fn perf(out: &std::path::Path, threads: Vec<usize>, budget: f64, repeat: usize) -> ExitCode {
     use hooke::bench::perf;
-    if threads.is_empty() {
-        let all = std::thread::available_parallelism().map_or(1, |n| n.get());
-        threads = if all > 1 { vec![1, all] } else { vec![1] };
-    }
-    if threads.contains(&0) {
-        return fail("--threads must be at least 1");
-    }
+    let threads = match thread_counts(threads) {
+        Ok(t) => t,
+        Err(e) => return fail(e),
+    };
     if !(budget.is_finite() && budget > 0.0) {
         return fail(format!("--budget must be finite and > 0, got {budget}"));
     }
@@ -362,13 +392,69 @@ fn perf(out: &std::path::Path, mut threads: Vec<usize>, budget: f64, repeat: usi
         Ok(b) => b,
         Err(e) => return fail(e),
     };
-    let list: Vec<String> = threads.iter().map(|t| t.to_string()).collect();
     let command = format!(
-        "hooke bench perf --threads {} --budget {budget:e} --repeat {repeat}",
-        list.join(",")
+        "hooke bench perf{} --budget {budget:e} --repeat {repeat}",
+        list_flag("--threads", &threads)
     );
     let md = perf::markdown(&rows, &loads, &bounds, &command);
     write_report(out, &[("perf.csv", &perf::csv(&rows)), ("perf.md", &md)])
+}
+
+fn scale(
+    out: &std::path::Path,
+    mut widths: Vec<usize>,
+    threads: Vec<usize>,
+    steps: u64,
+    repeat: usize,
+) -> ExitCode {
+    use hooke::bench::scale;
+    let command = format!(
+        "hooke bench scale{}{} --steps {steps} --repeat {repeat}",
+        list_flag("--widths", &widths),
+        list_flag("--threads", &threads)
+    );
+    if widths.is_empty() {
+        widths = scale::WIDTHS.to_vec();
+    }
+    let threads = match thread_counts(threads) {
+        Ok(t) => t,
+        Err(e) => return fail(e),
+    };
+    if widths.iter().any(|&w| w < 2) {
+        return fail("--widths: every width must be at least 2");
+    }
+    if steps == 0 || repeat == 0 {
+        return fail("--steps and --repeat must be at least 1");
+    }
+    let machine = hooke::bench::machine();
+    eprintln!("hooke bench scale on {machine}");
+    let rows = match scale::run(&widths, &threads, steps, repeat, |w| eprintln!("  {w}")) {
+        Ok(r) => r,
+        Err(e) => return fail(e),
+    };
+    let md = scale::markdown(&rows, &machine, &command);
+    write_report(out, &[("scale.csv", &scale::csv(&rows)), ("scale.md", &md)])
+}
+
+/// ` --flag a,b` for a non-empty list, else nothing.
+fn list_flag(flag: &str, values: &[usize]) -> String {
+    if values.is_empty() {
+        return String::new();
+    }
+    let list: Vec<String> = values.iter().map(|v| v.to_string()).collect();
+    format!(" {flag} {}", list.join(","))
+}
+
+/// The thread counts asked for, or 1 and all cores; each at least 1.
+fn thread_counts(threads: Vec<usize>) -> Result<Vec<usize>, String> {
+    if threads.contains(&0) {
+        return Err("--threads must be at least 1".into());
+    }
+    if !threads.is_empty() {
+        return Ok(threads);
+    }
+    let all = std::thread::available_parallelism().map_or(1, |n| n.get());
+    Ok(if all > 1 { vec![1, all] } else { vec![1] })
 }
 
 fn stability(out: &std::path::Path, scenes: &std::path::Path, steps: u64) -> ExitCode {

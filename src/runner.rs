@@ -41,6 +41,9 @@ pub struct Overrides {
     pub threads: Option<usize>,
     /// Time each pass of the step (the report's `pass_seconds`).
     pub profile: bool,
+    /// Run the particle passes as separate systems instead of one fused sweep
+    /// ([`sim::ParticleSweep`]), so that `profile` times each of them.
+    pub separate_passes: bool,
 }
 
 impl Overrides {
@@ -176,6 +179,9 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
     }
     if overrides.profile {
         sim::profile::enable(&mut app);
+    }
+    if overrides.separate_passes {
+        app.insert_resource(sim::ParticleSweep { fused: false });
     }
     let world = app.world_mut();
     load_into_world(world, loaded);

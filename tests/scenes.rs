@@ -40,8 +40,8 @@ fn invalid(edit: impl Fn(&str) -> String) -> String {
 #[test]
 fn the_issue_schema_loads() {
     let loaded = parse(&scene_text(|s| s.to_string())).unwrap();
-    assert_eq!(loaded.expanded.particles.len(), 2);
-    assert_eq!(loaded.expanded.springs.len(), 1);
+    assert_eq!(loaded.expanded().particles.len(), 2);
+    assert_eq!(loaded.expanded().springs.len(), 1);
 }
 
 #[test]
@@ -164,7 +164,7 @@ fn missing_file_is_named() {
 #[test]
 fn generated_cloth_matches_the_peer_layout() {
     let loaded = presets::resolve("cloth32").unwrap();
-    let e = &loaded.expanded;
+    let e = &loaded.expanded();
     assert_eq!((e.particles.len(), e.springs.len()), (1024, 3906));
     // Particle p = r*32 + c at (c/31, 1 - r/31); row 0 pinned.
     let p = e.particles[2 * 32 + 5];

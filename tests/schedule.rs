@@ -25,6 +25,7 @@ fn systems_for_unused_features_do_not_run() {
             damping: 0,
             ground: 0,
             advance: 250,
+            sweeps: 250,
             tear: 0,
         }
     );
@@ -47,6 +48,74 @@ fn systems_for_unused_features_do_not_run() {
         (n.springs, n.damping, n.ground, n.advance),
         (50, 40, 40, 50)
     );
+}
+
+/// The fused particle sweep gives the separate passes' result bit for bit, for every
+/// integrator, with damping and ground each on and off, on one and two threads; and it is
+/// assembled from the passes in use: without damping it counts no damping work, without a
+/// ground no contact test, while the separate passes' systems do not run at all.
+#[test]
+fn the_fused_sweep_equals_the_separate_passes_bit_for_bit() {
+    use hooke::sim::{ParticleSweep, SolverThreads};
+    let cloth = presets::resolve("cloth32").unwrap().scene;
+    let big = hooke::bench::perf::cloth(80); // 25k springs: two threads split the work
+    for (scene, threads) in [(&cloth, 1), (&big, 2)] {
+        for integrator in Integrator::ALL {
+            for (damping, ground) in [
+                (10.0, Some(0.0)),
+                (0.0, Some(0.0)),
+                (10.0, None),
+                (0.0, None),
+            ] {
+                let mut scene = scene.clone();
+                scene.integrator = integrator;
+                scene.damping = damping;
+                scene.ground = ground;
+                // Large enough steps that the cloth reaches the ground in a few steps.
+                scene.dt = if integrator.unconditionally_stable() {
+                    1.0 / 120.0
+                } else {
+                    2e-4
+                };
+                if integrator == Integrator::ExplicitEuler {
+                    scene.dt = 5e-5;
+                }
+                let run = |fused: bool| {
+                    let mut app = app_with(scene.clone());
+                    app.insert_resource(ParticleSweep { fused });
+                    app.insert_resource(SolverThreads::new(threads).unwrap());
+                    step(&mut app, 30);
+                    let s = solver(&app);
+                    let bits: Vec<[u64; 4]> = (s.x().iter().zip(s.v()))
+                        .map(|(x, v)| [x.x, x.y, v.x, v.y].map(f64::to_bits))
+                        .collect();
+                    (bits, *app.world().resource::<PassCounts>())
+                };
+                let (fused, counts) = run(true);
+                let (separate, separate_counts) = run(false);
+                let what =
+                    format!("{integrator}, mu {damping}, ground {ground:?}, {threads} threads");
+                assert!(fused == separate, "{what}: the fused sweep differs");
+                assert_eq!(counts.sweeps, 30, "{what}");
+                assert_eq!(separate_counts.sweeps, 0, "{what}");
+                assert_eq!(
+                    counts.damping,
+                    if damping != 0.0 { 30 } else { 0 },
+                    "{what}"
+                );
+                assert_eq!(
+                    counts.ground,
+                    if ground.is_some() { 30 } else { 0 },
+                    "{what}"
+                );
+                assert_eq!(
+                    (counts.integrate, counts.advance),
+                    (separate_counts.integrate, separate_counts.advance),
+                    "{what}"
+                );
+            }
+        }
+    }
 }
 
 #[test]

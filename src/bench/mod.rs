@@ -4,6 +4,7 @@ pub mod equilibrium;
 pub mod large_steps;
 pub mod perf;
 pub mod plot;
+pub mod scale;
 pub mod stability;
 pub mod traffic;
 pub mod trajectory;

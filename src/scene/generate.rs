@@ -1,4 +1,10 @@
 //! Expands [`Generator`]s into explicit particles and springs.
+//!
+//! The expansion is streamed: [`Scene::particle_defs`] and [`Scene::spring_defs`] yield the
+//! scene's particles and springs one by one, each with its exact count, so that loading a cloth
+//! of millions of springs spawns them straight from the generator (the ECS reserves exactly
+//! what they need) instead of first building the whole list. [`Scene::expand`] collects them
+//! where a list is wanted.
 
 use super::format::*;
 use bevy::math::DVec2;
@@ -15,14 +21,47 @@ pub struct Expanded {
 impl Scene {
     /// The scene's explicit particles and springs followed by the generated ones.
     pub fn expand(&self) -> Expanded {
-        let mut out = Expanded {
-            particles: self.particles.clone(),
-            springs: self.springs.clone(),
-        };
-        for g in &self.generate {
-            g.expand_into(&mut out);
+        Expanded {
+            particles: self.particle_defs().collect(),
+            springs: self.spring_defs().collect(),
         }
-        out
+    }
+
+    /// How many particles and springs the scene has, generators included (saturating).
+    pub fn counts(&self) -> (usize, usize) {
+        let explicit = (self.particles.len(), self.springs.len());
+        self.generate.iter().fold(explicit, |(p, s), g| {
+            let (gp, gs) = g.counts();
+            (p.saturating_add(gp), s.saturating_add(gs))
+        })
+    }
+
+    /// The explicit particles, then each generator's, in index order.
+    pub fn particle_defs(&self) -> impl Iterator<Item = ParticleDef> + '_ {
+        let generated = self.generate.iter().flat_map(|g| g.particle_defs());
+        Exact::new(
+            self.particles.iter().copied().chain(generated),
+            self.counts().0,
+        )
+    }
+
+    /// The explicit springs, then each generator's (by particle index, rest at the initial
+    /// distance), in order.
+    pub fn spring_defs(&self) -> impl Iterator<Item = SpringDef> + '_ {
+        let bases = self.generate.iter().scan(self.particles.len(), |base, g| {
+            let at = *base;
+            *base += g.counts().0;
+            Some(at)
+        });
+        let generated = self
+            .generate
+            .iter()
+            .zip(bases)
+            .flat_map(|(g, base)| g.spring_defs(base));
+        Exact::new(
+            self.springs.iter().copied().chain(generated),
+            self.counts().1,
+        )
     }
 }
 
@@ -41,93 +80,198 @@ impl Generator {
         }
     }
 
-    fn expand_into(&self, out: &mut Expanded) {
-        let base = out.particles.len();
+    /// The generator's particles, in index order.
+    fn particle_defs(&self) -> impl Iterator<Item = ParticleDef> + '_ {
+        let n = self.counts().0;
+        (0..n).map(move |i| match *self {
+            Generator::Grid {
+                cols,
+                mass,
+                pin,
+                vel,
+                ..
+            } => {
+                let (r, c) = (i / cols, i % cols);
+                let pinned = match pin {
+                    Pin::None => false,
+                    Pin::First => r == 0,
+                    Pin::Ends => r == 0 && (c == 0 || c == cols - 1),
+                };
+                ParticleDef {
+                    pos: self.position(i),
+                    vel: if pinned { (0.0, 0.0) } else { vel },
+                    mass,
+                    pinned,
+                }
+            }
+            Generator::Chain {
+                segments,
+                mass,
+                pin,
+                ..
+            } => ParticleDef {
+                pos: self.position(i),
+                vel: (0.0, 0.0),
+                mass,
+                pinned: match pin {
+                    Pin::None => false,
+                    Pin::First => i == 0,
+                    Pin::Ends => i == 0 || i == segments,
+                },
+            },
+        })
+    }
+
+    /// The position of the generator's particle `i`.
+    fn position(&self, i: usize) -> (f64, f64) {
         match *self {
             Generator::Grid {
                 cols,
                 rows,
                 min,
                 max,
-                mass,
-                stiffness,
-                shear,
-                pin,
-                vel,
+                ..
             } => {
                 let (w, h) = (max.0 - min.0, max.1 - min.1);
-                for r in 0..rows {
-                    for c in 0..cols {
-                        let pinned = match pin {
-                            Pin::None => false,
-                            Pin::First => r == 0,
-                            Pin::Ends => r == 0 && (c == 0 || c == cols - 1),
-                        };
-                        let x = min.0 + c as f64 / (cols - 1) as f64 * w;
-                        let y = max.1 - r as f64 / (rows - 1) as f64 * h;
-                        out.particles.push(ParticleDef {
-                            pos: (x, y),
-                            vel: if pinned { (0.0, 0.0) } else { vel },
-                            mass,
-                            pinned,
-                        });
-                    }
-                }
-                let id = |r: usize, c: usize| base + r * cols + c;
-                for r in 0..rows {
-                    for c in 0..cols {
-                        if c + 1 < cols {
-                            push_spring(out, id(r, c), id(r, c + 1), stiffness);
-                        }
-                        if r + 1 < rows {
-                            push_spring(out, id(r, c), id(r + 1, c), stiffness);
-                        }
-                        if shear && r + 1 < rows && c + 1 < cols {
-                            push_spring(out, id(r, c), id(r + 1, c + 1), stiffness);
-                            push_spring(out, id(r, c + 1), id(r + 1, c), stiffness);
-                        }
-                    }
-                }
+                let (r, c) = (i / cols, i % cols);
+                let x = min.0 + c as f64 / (cols - 1) as f64 * w;
+                let y = max.1 - r as f64 / (rows - 1) as f64 * h;
+                (x, y)
             }
             Generator::Chain {
-                from,
-                to,
-                segments,
-                mass,
-                stiffness,
-                pin,
+                from, to, segments, ..
             } => {
                 let (a, b) = (DVec2::from(from), DVec2::from(to));
-                for i in 0..=segments {
-                    let p = a + (b - a) * (i as f64 / segments as f64);
-                    let pinned = match pin {
-                        Pin::None => false,
-                        Pin::First => i == 0,
-                        Pin::Ends => i == 0 || i == segments,
-                    };
-                    out.particles.push(ParticleDef {
-                        pos: (p.x, p.y),
-                        vel: (0.0, 0.0),
-                        mass,
-                        pinned,
-                    });
-                }
-                for i in 0..segments {
-                    push_spring(out, base + i, base + i + 1, stiffness);
-                }
+                let p = a + (b - a) * (i as f64 / segments as f64);
+                (p.x, p.y)
             }
+        }
+    }
+
+    /// The generator's springs between its particles `base + i`, rest at the initial distance.
+    fn spring_defs(&self, base: usize) -> impl Iterator<Item = SpringDef> + '_ {
+        let spring = move |a: usize, b: usize, stiffness: f64| {
+            let (pa, pb) = (self.position(a), self.position(b));
+            SpringDef {
+                a: base + a,
+                b: base + b,
+                stiffness,
+                rest: (DVec2::from(pa) - DVec2::from(pb)).length(),
+            }
+        };
+        let (cells, per_cell) = match *self {
+            Generator::Grid { cols, rows, .. } => (cols * rows, 4),
+            Generator::Chain { segments, .. } => (segments, 1),
+        };
+        (0..cells).flat_map(move |i| {
+            let mut out = [None; 4];
+            match *self {
+                Generator::Grid {
+                    cols,
+                    rows,
+                    stiffness,
+                    shear,
+                    ..
+                } => {
+                    // Per (r, c): right, down, and with shear both diagonals.
+                    let (r, c) = (i / cols, i % cols);
+                    if c + 1 < cols {
+                        out[0] = Some(spring(i, i + 1, stiffness));
+                    }
+                    if r + 1 < rows {
+                        out[1] = Some(spring(i, i + cols, stiffness));
+                    }
+                    if shear && r + 1 < rows && c + 1 < cols {
+                        out[2] = Some(spring(i, i + cols + 1, stiffness));
+                        out[3] = Some(spring(i + 1, i + cols, stiffness));
+                    }
+                }
+                Generator::Chain { stiffness, .. } => out[0] = Some(spring(i, i + 1, stiffness)),
+            }
+            out.into_iter().take(per_cell).flatten()
+        })
+    }
+}
+
+/// An iterator whose length is known in advance (from [`Generator::counts`]) but not to the
+/// iterator adapters that make it (`flat_map` cannot tell): it says its exact length, so that
+/// a collect or a `spawn_batch` allocates once, exactly.
+struct Exact<I> {
+    inner: I,
+    remaining: usize,
+}
+
+impl<I> Exact<I> {
+    fn new(inner: I, len: usize) -> Self {
+        Exact {
+            inner,
+            remaining: len,
         }
     }
 }
 
-/// Adds a spring whose rest length is the current distance of its ends.
-fn push_spring(out: &mut Expanded, a: usize, b: usize, stiffness: f64) {
-    let (pa, pb) = (out.particles[a].pos, out.particles[b].pos);
-    let rest = (DVec2::from(pa) - DVec2::from(pb)).length();
-    out.springs.push(SpringDef {
-        a,
-        b,
-        stiffness,
-        rest,
-    });
+impl<I: Iterator> Iterator for Exact<I> {
+    type Item = I::Item;
+
+    fn next(&mut self) -> Option<I::Item> {
+        let item = self.inner.next();
+        self.remaining = self.remaining.saturating_sub(item.is_some() as usize);
+        item
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        (self.remaining, Some(self.remaining))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each stream yields exactly the count it announces, generators of both kinds after
+    /// explicit items, indices continuing across generators.
+    #[test]
+    fn streams_yield_their_counts_in_index_order() {
+        let scene = Scene {
+            particles: vec![ParticleDef {
+                pos: (0.5, 0.5),
+                vel: (0.0, 0.0),
+                mass: 1.0,
+                pinned: false,
+            }],
+            generate: vec![
+                Generator::Chain {
+                    from: (0.0, 0.5),
+                    to: (1.0, 0.5),
+                    segments: 3,
+                    mass: 1.0,
+                    stiffness: 1e3,
+                    pin: Pin::Ends,
+                },
+                Generator::Grid {
+                    cols: 3,
+                    rows: 4,
+                    min: (0.0, 0.0),
+                    max: (1.0, 1.0),
+                    mass: 2.0,
+                    stiffness: 1e4,
+                    shear: true,
+                    pin: Pin::First,
+                    vel: (0.1, 0.0),
+                },
+            ],
+            ..Scene::default()
+        };
+        let (np, ns) = scene.counts();
+        assert_eq!((np, ns), (1 + 4 + 12, 3 + (2 * 4 + 3 * 3 + 2 * 2 * 3)));
+        let particles = scene.particle_defs();
+        assert_eq!(particles.size_hint(), (np, Some(np)));
+        assert_eq!(particles.count(), np);
+        let springs: Vec<SpringDef> = scene.spring_defs().collect();
+        assert_eq!(springs.len(), ns);
+        // The chain's springs join 1-2, 2-3, 3-4; the grid's first spring joins 5 and 6.
+        let ends: Vec<(usize, usize)> = springs.iter().map(|s| (s.a, s.b)).collect();
+        assert_eq!(&ends[..4], &[(1, 2), (2, 3), (3, 4), (5, 6)]);
+        assert!(springs.iter().all(|s| s.a < np && s.b < np && s.rest > 0.0));
+    }
 }

@@ -1,6 +1,6 @@
 //! Reading scene files and putting scenes into a Bevy world.
 
-use super::format::Scene;
+use super::format::{ParticleDef, Scene, SpringDef};
 use super::generate::Expanded;
 use super::validate::validate;
 use crate::sim::*;
@@ -64,15 +64,15 @@ impl fmt::Display for SceneError {
 
 impl std::error::Error for SceneError {}
 
-/// A scene that passed validation, with its generators expanded.
+/// A scene that passed validation. Its generators stay as written: loading streams their
+/// particles and springs into the world ([`Scene::particle_defs`]), and
+/// [`LoadedScene::expanded`] lists them where a list is wanted.
 #[derive(Debug, Clone)]
 pub struct LoadedScene {
     /// Where it came from, if from a file.
     pub path: Option<PathBuf>,
     /// The scene as written.
     pub scene: Scene,
-    /// Its particles and springs, generators expanded.
-    pub expanded: Expanded,
 }
 
 impl LoadedScene {
@@ -82,12 +82,13 @@ impl LoadedScene {
             path: path.clone().unwrap_or_else(|| "<scene>".into()),
             problems,
         };
-        let expanded = validate(&scene).map_err(invalid)?;
-        Ok(LoadedScene {
-            path,
-            scene,
-            expanded,
-        })
+        validate(&scene).map_err(invalid)?;
+        Ok(LoadedScene { path, scene })
+    }
+
+    /// Its particles and springs, generators expanded.
+    pub fn expanded(&self) -> Expanded {
+        self.scene.expand()
     }
 
     /// Parses and validates RON text; `path` only names the source in errors.
@@ -139,7 +140,12 @@ pub fn load_into_world(world: &mut World, loaded: &LoadedScene) {
         tear: s.tear,
         iterations: s.iterations,
     };
-    replace_contents(world, params, &loaded.expanded);
+    despawn_contents(world, params);
+    spawn_streamed(
+        world,
+        loaded.scene.particle_defs(),
+        loaded.scene.spring_defs(),
+    );
     world.insert_resource(SimClock::default());
     world.insert_resource(SimStatus::default());
     world.insert_resource(PassCounts::default());
@@ -151,6 +157,12 @@ pub fn load_into_world(world: &mut World, loaded: &LoadedScene) {
 /// place (the solver repacks on the next tick). Clock, status and counters are left alone:
 /// a scene load resets them, an undo restores its own.
 pub fn replace_contents(world: &mut World, params: SimParams, expanded: &Expanded) {
+    despawn_contents(world, params);
+    spawn_expanded(world, expanded);
+}
+
+/// Despawns every particle and spring and sets the parameters; a new, empty solver.
+fn despawn_contents(world: &mut World, params: SimParams) {
     let old: Vec<Entity> = world
         .query_filtered::<Entity, Or<(With<Particle>, With<Spring>)>>()
         .iter(world)
@@ -160,39 +172,52 @@ pub fn replace_contents(world: &mut World, params: SimParams, expanded: &Expande
     }
     *world.resource_mut::<SimParams>() = params;
     world.insert_resource(Solver::default());
-    spawn_expanded(world, expanded);
 }
 
 /// Spawns particles and springs (in that order, so their creation order is the list's);
 /// springs index into the particles given here. Returns the particles.
 pub fn spawn_expanded(world: &mut World, expanded: &Expanded) -> Vec<Entity> {
-    let mut particles = Vec::with_capacity(expanded.particles.len());
-    for p in &expanded.particles {
+    spawn_streamed(
+        world,
+        expanded.particles.iter().copied(),
+        expanded.springs.iter().copied(),
+    )
+}
+
+/// [`spawn_expanded`] from streams: each kind in one batch, so that the ECS reserves what the
+/// stream's length says, once (a cloth of millions of springs then never doubles a table), and
+/// no list of the whole scene is built first. Pinned particles get [`Pinned`] after their
+/// batch; creation order is the streams' either way.
+fn spawn_streamed(
+    world: &mut World,
+    particles: impl Iterator<Item = ParticleDef>,
+    springs: impl Iterator<Item = SpringDef>,
+) -> Vec<Entity> {
+    let mut pinned = vec![];
+    let bundles = particles.enumerate().map(|(i, p)| {
+        if p.pinned {
+            pinned.push(i);
+        }
         let vel = if p.pinned {
             DVec2::ZERO
         } else {
             DVec2::from(p.vel)
         };
-        let bundle = (
+        (
             Particle,
             Position(DVec2::from(p.pos)),
             Velocity(vel),
             Mass(p.mass),
-        );
-        let mut e = world.spawn(bundle);
-        if p.pinned {
-            e.insert(Pinned);
-        }
-        particles.push(e.id());
+        )
+    });
+    let entities: Vec<Entity> = world.spawn_batch(bundles).collect();
+    for &i in &pinned {
+        world.entity_mut(entities[i]).insert(Pinned);
     }
     world.spawn_batch(
-        expanded
-            .springs
-            .iter()
-            .map(|s| Spring::new(particles[s.a], particles[s.b], s.rest, s.stiffness))
-            .collect::<Vec<_>>(),
+        springs.map(|s| Spring::new(entities[s.a], entities[s.b], s.rest, s.stiffness)),
     );
-    particles
+    entities
 }
 
 /// The world's current particles and springs as an explicit scene (for saving what a user made).
@@ -219,11 +244,12 @@ pub fn snapshot(world: &mut World) -> Scene {
     }
 }
 
-/// Every particle and spring in creation order, springs by particle index: what
+/// Every particle in creation order and every spring by its ends' indices (the solver's
+/// order): what
 /// [`spawn_expanded`] takes to make the same network again. Springs get `stiffness` when it is
 /// set, else their own. Springs whose ends are not both particles are left out.
 pub fn explicit_state(world: &mut World, stiffness: Option<f64>) -> Expanded {
-    let mut particles: Vec<(CreationOrder, Entity, super::format::ParticleDef)> = world
+    let mut particles: Vec<(CreationOrder, Entity, ParticleDef)> = world
         .query_filtered::<(
             Entity,
             &CreationOrder,
@@ -234,7 +260,7 @@ pub fn explicit_state(world: &mut World, stiffness: Option<f64>) -> Expanded {
         ), With<Particle>>()
         .iter(world)
         .map(|(e, p, x, v, m, pinned)| {
-            let def = super::format::ParticleDef {
+            let def = ParticleDef {
                 pos: (x.0.x, x.0.y),
                 vel: (v.0.x, v.0.y),
                 mass: m.0,
@@ -249,20 +275,21 @@ pub fn explicit_state(world: &mut World, stiffness: Option<f64>) -> Expanded {
         .enumerate()
         .map(|(i, p)| (p.1, i))
         .collect();
-    let mut springs: Vec<(CreationOrder, super::format::SpringDef)> = world
-        .query::<(&Spring, &CreationOrder)>()
+    let mut springs: Vec<(Entity, SpringDef)> = world
+        .query::<(Entity, &Spring)>()
         .iter(world)
-        .filter_map(|(s, order)| {
-            let def = super::format::SpringDef {
+        .filter_map(|(e, s)| {
+            let def = SpringDef {
                 a: *index.get(&s.a)?,
                 b: *index.get(&s.b)?,
                 stiffness: stiffness.unwrap_or(s.stiffness),
                 rest: s.rest,
             };
-            Some((*order, def))
+            Some((e, def))
         })
         .collect();
-    springs.sort_by_key(|s| s.0);
+    // In the solver's order: by ends, ties by entity.
+    springs.sort_by_key(|(e, s)| (s.a, s.b, *e));
     Expanded {
         particles: particles.into_iter().map(|p| p.2).collect(),
         springs: springs.into_iter().map(|s| s.1).collect(),

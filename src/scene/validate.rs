@@ -1,7 +1,6 @@
 //! Scene validation: every problem is named with where it is, so a user can fix the file.
 
 use super::format::*;
-use super::generate::Expanded;
 
 /// Scenes larger than this are refused before anything is allocated for them.
 pub const MAX_PARTICLES: usize = 20_000_000;
@@ -10,8 +9,9 @@ pub const MAX_SPRINGS: usize = 80_000_000;
 /// At most this many problems are listed; the rest are counted.
 const MAX_LISTED: usize = 20;
 
-/// Checks a scene and expands its generators. On failure, returns every problem found.
-pub fn validate(scene: &Scene) -> Result<Expanded, Vec<String>> {
+/// Checks a scene (its generators by their parameters, without expanding them). On failure,
+/// returns every problem found.
+pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
     let mut p = Problems::default();
     let finite2 = |v: (f64, f64)| v.0.is_finite() && v.1.is_finite();
 
@@ -144,7 +144,7 @@ pub fn validate(scene: &Scene) -> Result<Expanded, Vec<String>> {
     if !p.list.is_empty() {
         return Err(p.finish());
     }
-    Ok(scene.expand())
+    Ok(())
 }
 
 fn check_mass(p: &mut Problems, at: &str, mass: f64) {

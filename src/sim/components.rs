@@ -27,13 +27,13 @@ use bevy::ecs::world::DeferredWorld;
 #[component(on_add = assign_creation_order)]
 pub struct Particle;
 
-/// When a particle or spring was made, among all of them: assigned from [`Serials`] when its
-/// [`Particle`] or [`Spring`] is added (a value set by hand, non-zero, is kept). The solver
-/// orders particles and breaks spring ties by it, so results do not depend on archetype layout.
+/// When a particle was made, among all of them: assigned from [`Serials`] when its
+/// [`Particle`] is added (a value set by hand, non-zero, is kept). The solver orders particles
+/// by it, so results do not depend on archetype layout.
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub struct CreationOrder(pub u64);
 
-/// The hook of [`Particle`] and [`Spring`]: hands out the next serial (when the world has the
+/// The hook of [`Particle`]: hands out the next serial (when the world has the
 /// [`Serials`] of [`crate::sim::SimPlugin`]).
 fn assign_creation_order(mut world: DeferredWorld, context: HookContext) {
     let unset = world
@@ -98,11 +98,13 @@ pub struct Pinned;
 
 /// A Hooke spring between two particle entities:
 /// `f_a = -k (|x_a - x_b| - rest) (x_a - x_b) / |x_a - x_b|`, and `f_b = -f_a`.
-/// Spawn it like any component, `commands.spawn(Spring::new(a, b, rest, k))`; its
-/// [`CreationOrder`] is assigned when it is spawned.
+/// Spawn it like any component, `commands.spawn(Spring::new(a, b, rest, k))`.
+///
+/// A spring is this component and nothing else (no index, no serial): a cloth has about four
+/// springs per particle, and at millions of springs every byte per spring shows in memory.
+/// The solver packs springs by their ends' indices (ties by entity), and finds a spring by its
+/// ends when it is edited.
 #[derive(Component, Debug, Clone, Copy, PartialEq)]
-#[require(SolverIndex, CreationOrder)]
-#[component(on_add = assign_creation_order)]
 pub struct Spring {
     /// One end (a particle entity).
     pub a: Entity,
@@ -174,8 +176,8 @@ impl Command for JoinWithin {
     }
 }
 
-/// Dense index of a particle or spring in the solver's arrays (`u32::MAX` until the next sync
-/// packs it). Maintained by the solver sync; read-only for everyone else.
+/// Dense index of a particle in the solver's arrays (`u32::MAX` until the next sync packs
+/// it). Maintained by the solver sync; read-only for everyone else.
 #[derive(Component, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SolverIndex(pub u32);
 
@@ -185,7 +187,7 @@ impl Default for SolverIndex {
     }
 }
 
-/// Hands out creation serials for particles and springs (see [`CreationOrder`]).
+/// Hands out creation serials for particles (see [`CreationOrder`]).
 ///
 /// ```
 /// # use hooke::sim::Serials;

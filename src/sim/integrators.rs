@@ -95,6 +95,7 @@ fn stage_forces(s: &mut Solver, g: DVec2, threads: &SolverThreads) {
 /// Velocity Verlet, kick-drift-kick, with a second force evaluation at x0 + dt v½.
 pub fn velocity_verlet(s: &mut Solver, dt: f64, gravity: DVec2, threads: &SolverThreads) {
     s.scratch.fit(s.x.len());
+    s.drift_buffer();
     let (half, springs) = (0.5 * dt, s.springs.len());
     let sc = &mut s.scratch;
     let data = (
@@ -125,6 +126,7 @@ pub fn velocity_verlet(s: &mut Solver, dt: f64, gravity: DVec2, threads: &Solver
 /// Classic RK4 on x' = v, v' = f(x)/m.
 pub fn rk4(s: &mut Solver, dt: f64, gravity: DVec2, threads: &SolverThreads) {
     s.scratch.fit(s.x.len());
+    s.drift_buffer();
     let springs = s.springs.len();
     let sc = &mut s.scratch;
     // Stage 1: (v0, a0).

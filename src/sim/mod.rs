@@ -32,10 +32,11 @@ pub use integrators::CgSettings;
 pub use parallel::{PARALLEL_MIN_SPRINGS, SolverThreads};
 pub use params::*;
 pub use profile::PassTimes;
+pub use schedule::{
+    ParticleSweep, PhysicsStep, PhysicsSystems, SimPlugin, StepBudget, StepSystems, TickPlan,
+    advance, pack,
+};
 #[allow(deprecated)]
 pub use schedule::{PhysicsSet, StepSet};
-pub use schedule::{
-    PhysicsStep, PhysicsSystems, SimPlugin, StepBudget, StepSystems, TickPlan, advance, pack,
-};
 pub use solver::{Energy, PackedSpring, SolveStats, Solver};
 pub use stability::StabilityEstimate;

@@ -293,6 +293,9 @@ pub struct PassCounts {
     pub ground: u64,
     /// Position updates.
     pub advance: u64,
+    /// Fused particle sweeps ([`crate::sim::ParticleSweep`]): each also counts as the passes it
+    /// did (the kick as `integrate`, `damping`, `ground`, `advance`).
+    pub sweeps: u64,
     /// Tear checks (one per tick, only while [`SimParams::tear`] is set).
     pub tear: u64,
 }

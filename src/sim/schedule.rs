@@ -86,6 +86,36 @@ pub enum StepSystems {
 #[deprecated(since = "0.1.0", note = "renamed to `StepSystems`")]
 pub type StepSet = StepSystems;
 
+/// Whether the particle passes after the forces run fused, as one sweep over the particles
+/// (the default), or as separate systems, one per set.
+///
+/// Fused, [`StepSystems::Advance`] runs one loop that does for each particle what the
+/// separate passes do, in their order: the Euler methods' kick (their `Integrate`), damping,
+/// ground contact and the position update. It is assembled from what is on: without damping
+/// it does no damping work, without a ground no contact test (each combination is its own
+/// loop). The result is the separate passes' bit for bit (a test checks every integrator);
+/// the arrays are read and written once a step instead of once per pass.
+///
+/// The sets stay in their order either way. A system that must see the state *between* the
+/// passes (after the kick and before damping, say) turns fusion off:
+///
+/// ```
+/// # use hooke::sim::ParticleSweep;
+/// let mut app = hooke::headless_app();
+/// app.insert_resource(ParticleSweep { fused: false });
+/// ```
+#[derive(Resource, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ParticleSweep {
+    /// One fused sweep (true), or one system per pass.
+    pub fused: bool,
+}
+
+impl Default for ParticleSweep {
+    fn default() -> Self {
+        ParticleSweep { fused: true }
+    }
+}
+
 /// How many steps one fixed tick runs.
 ///
 /// ```
@@ -179,6 +209,7 @@ impl Plugin for SimPlugin {
             .init_resource::<Tearing>()
             .init_resource::<Solver>()
             .init_resource::<TickPlan>()
+            .init_resource::<ParticleSweep>()
             .init_resource::<StepBudget>()
             .init_resource::<CgSettings>()
             .init_resource::<SolverThreads>()
@@ -197,10 +228,7 @@ impl Plugin for SimPlugin {
         .add_systems(
             FixedUpdate,
             (
-                (
-                    inputs::check_inputs,
-                    sync_into_solver.run_if(inputs::inputs_valid),
-                )
+                (inputs::check_inputs, sync_tick.run_if(inputs::inputs_valid))
                     .chain()
                     .in_set(PhysicsSystems::Prepare),
                 run_steps
@@ -254,8 +282,12 @@ impl Plugin for SimPlugin {
                         .chain()
                         .in_set(StepSystems::Forces),
                     (
-                        explicit_euler.run_if(integrator_is(Integrator::ExplicitEuler)),
-                        symplectic_euler.run_if(integrator_is(Integrator::SymplecticEuler)),
+                        explicit_euler.run_if(
+                            integrator_is(Integrator::ExplicitEuler).and_then(not(sweep_fused)),
+                        ),
+                        symplectic_euler.run_if(
+                            integrator_is(Integrator::SymplecticEuler).and_then(not(sweep_fused)),
+                        ),
                         velocity_verlet.run_if(integrator_is(Integrator::VelocityVerlet)),
                         rk4.run_if(integrator_is(Integrator::Rk4)),
                         implicit_euler.run_if(integrator_is(Integrator::ImplicitEuler)),
@@ -266,12 +298,17 @@ impl Plugin for SimPlugin {
                         .chain()
                         .in_set(StepSystems::Integrate),
                     damp_velocity
-                        .run_if(damping_enabled)
+                        .run_if(damping_enabled.and_then(not(sweep_fused)))
                         .in_set(StepSystems::Damping),
                     ground_contact
-                        .run_if(ground_enabled)
+                        .run_if(ground_enabled.and_then(not(sweep_fused)))
                         .in_set(StepSystems::Ground),
-                    advance_positions.in_set(StepSystems::Advance),
+                    (
+                        advance_positions.run_if(not(sweep_fused)),
+                        particle_sweep.run_if(sweep_fused),
+                    )
+                        .chain()
+                        .in_set(StepSystems::Advance),
                 ));
         });
     }
@@ -298,6 +335,11 @@ pub fn integrator_reads_spring_forces(params: Res<SimParams>) -> bool {
 /// Only the selected integrator's system runs.
 pub fn integrator_is(which: Integrator) -> impl Fn(Res<SimParams>) -> bool + Clone {
     move |params: Res<SimParams>| params.integrator == which
+}
+
+/// Run condition: the particle passes run as one fused sweep ([`ParticleSweep`]).
+pub fn sweep_fused(sweep: Res<ParticleSweep>) -> bool {
+    sweep.fused
 }
 
 /// Run condition: damping is on (μ ≠ 0).
@@ -356,6 +398,7 @@ fn explicit_euler(
     mut n: ResMut<PassCounts>,
 ) {
     let s = &mut *solver;
+    s.drift_buffer();
     s.drift.copy_from_slice(&s.v);
     kick(s, params.dt, &threads);
     n.integrate += 1;
@@ -478,14 +521,9 @@ fn advance_positions(
     mut n: ResMut<PassCounts>,
 ) {
     let s = &mut *solver;
-    let drift = match params.integrator {
-        Integrator::ExplicitEuler
-        | Integrator::VelocityVerlet
-        | Integrator::Rk4
-        | Integrator::Xpbd => &s.drift,
-        Integrator::SymplecticEuler
-        | Integrator::ImplicitEuler
-        | Integrator::ProjectiveDynamics => &s.v,
+    let drift = match motion(params.integrator) {
+        kernels::Motion::ExplicitEuler | kernels::Motion::Drift => &s.drift,
+        kernels::Motion::SymplecticEuler | kernels::Motion::EndVelocity => &s.v,
     };
     let dt = params.dt;
     let finite = threads.chunked(
@@ -496,6 +534,57 @@ fn advance_positions(
     );
     s.non_finite = !finite;
     n.advance += 1;
+}
+
+/// How an integrator's step ends: with the Euler kick or without, and which velocity moves the
+/// particles (the position update's drift).
+fn motion(integrator: Integrator) -> kernels::Motion {
+    use kernels::Motion;
+    match integrator {
+        Integrator::ExplicitEuler => Motion::ExplicitEuler,
+        Integrator::SymplecticEuler => Motion::SymplecticEuler,
+        Integrator::ImplicitEuler | Integrator::ProjectiveDynamics => Motion::EndVelocity,
+        Integrator::VelocityVerlet | Integrator::Rk4 | Integrator::Xpbd => Motion::Drift,
+    }
+}
+
+/// The fused particle sweep ([`ParticleSweep`]): the Euler kick, damping, ground and the
+/// position update in one pass, with only the parts the scene uses.
+fn particle_sweep(
+    mut solver: ResMut<Solver>,
+    params: Res<SimParams>,
+    threads: Res<SolverThreads>,
+    mut n: ResMut<PassCounts>,
+) {
+    let s = &mut *solver;
+    let dt = params.dt;
+    let sweep = kernels::Sweep {
+        motion: motion(params.integrator),
+        decay: (params.damping != 0.0).then(|| (-params.damping * dt).exp()),
+        ground: params.ground,
+    };
+    let drift = match sweep.motion {
+        kernels::Motion::Drift => &s.drift[..],
+        // Not read: any array of the particles' length.
+        _ => &s.f[..],
+    };
+    let data = (&mut s.x[..], &mut s.v[..], &s.f[..], &s.inv_mass[..], drift);
+    let finite = threads.chunked(
+        s.springs.len(),
+        data,
+        |data| kernels::particle_sweep(data, dt, sweep),
+        |a, b| a & b,
+    );
+    s.non_finite = !finite;
+    let kicked = matches!(
+        sweep.motion,
+        kernels::Motion::ExplicitEuler | kernels::Motion::SymplecticEuler
+    );
+    n.integrate += kicked as u64;
+    n.damping += sweep.decay.is_some() as u64;
+    n.ground += sweep.ground.is_some() as u64;
+    n.advance += 1;
+    n.sweeps += 1;
 }
 
 /// Runs this tick's steps; stops at the first step that produced a non-finite value.
@@ -605,6 +694,16 @@ pub fn pack(world: &mut World) -> Result<(), String> {
     world
         .run_system_cached(sync_into_solver)
         .map_err(|e| format!("cannot pack the solver: {e}"))
+}
+
+/// The tick's sync: the same cached system instance as [`pack`]'s, so that the change
+/// detection of the two is one. A tick after `pack` sees only what changed since it, instead
+/// of every particle and spring as new (which repacked a big scene a second time).
+fn sync_tick(world: &mut World) {
+    if let Err(e) = pack(world) {
+        // Only when the world lacks the plugin's resources, which the plugin inserts.
+        error!("hooke: {e}");
+    }
 }
 
 #[cfg(test)]

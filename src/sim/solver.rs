@@ -47,19 +47,21 @@ pub struct Solver {
     /// branch in the loop.
     pub(crate) inv_mass: Vec<f64>,
     /// Each particle's [`crate::sim::ExternalForce`], added to gravity wherever forces are
-    /// evaluated; read only while `external_active`.
+    /// evaluated; stored only while one is set (`external_active`), else empty.
     pub(crate) external: Vec<DVec2>,
     /// Some external force is non-zero. When false, the force passes skip `external` entirely.
     pub(crate) external_active: bool,
     /// How many particles are [`crate::sim::Kinematic`] (held by the user).
     pub(crate) kinematic: usize,
     /// The velocity the position update moves each particle with (explicit Euler: the velocity
-    /// at the start of the step).
+    /// at the start of the step), for the integrators whose drift is not the end velocity;
+    /// empty until one of them runs ([`Solver::drift_buffer`]).
     pub(crate) drift: Vec<DVec2>,
     /// Spring entity of each packed spring, in creation order.
     pub(crate) spring_entities: Vec<Entity>,
     pub(crate) springs: Vec<PackedSpring>,
-    /// Each spring's own stiffness, kept so that clearing the override restores it.
+    /// Each spring's own stiffness while a stiffness override replaces it in `springs`, so that
+    /// clearing the override restores it; empty while none is applied.
     pub(crate) own_stiffness: Vec<f64>,
     /// The stiffness override the packed `k` values reflect.
     pub(crate) applied_override: Option<f64>,
@@ -105,7 +107,8 @@ impl Solver {
     pub fn inv_mass(&self) -> &[f64] {
         &self.inv_mass
     }
-    /// Each particle's external force, N (see [`crate::sim::ExternalForce`]).
+    /// Each particle's external force, N (see [`crate::sim::ExternalForce`]); empty while
+    /// none is set.
     pub fn external(&self) -> &[DVec2] {
         &self.external
     }
@@ -195,11 +198,70 @@ impl Solver {
 
     /// Applies (or clears) a global stiffness override to every spring.
     pub fn apply_stiffness_override(&mut self, k: Option<f64>) {
-        for (s, own) in self.springs.iter_mut().zip(&self.own_stiffness) {
-            s.k = k.unwrap_or(*own);
+        match k {
+            Some(k) => {
+                if self.own_stiffness.len() != self.springs.len() {
+                    self.own_stiffness = self.springs.iter().map(|s| s.k).collect();
+                }
+                self.springs.iter_mut().for_each(|s| s.k = k);
+            }
+            None => {
+                let own = std::mem::take(&mut self.own_stiffness);
+                for (s, own) in self.springs.iter_mut().zip(own) {
+                    s.k = own;
+                }
+            }
         }
         self.applied_override = k;
         self.touch();
+    }
+
+    /// Sets packed spring `i`'s own stiffness: in effect now, or restored when the override
+    /// is cleared.
+    pub(crate) fn set_own_stiffness(&mut self, i: usize, k: f64) {
+        match self.own_stiffness.get_mut(i) {
+            Some(own) => *own = k,
+            None => self.springs[i].k = k,
+        }
+    }
+
+    /// The packed index of spring entity `e` between dense particles `a` and `b`: a binary
+    /// search of the springs, which are sorted by their ends.
+    pub(crate) fn find_spring(&self, a: u32, b: u32, e: Entity) -> Option<usize> {
+        let start = self.springs.partition_point(|s| (s.a, s.b) < (a, b));
+        (start..self.springs.len())
+            .take_while(|&i| (self.springs[i].a, self.springs[i].b) == (a, b))
+            .find(|&i| self.spring_entities[i] == e)
+    }
+
+    /// Sets particle `i`'s external force, storing the array when the first one is set.
+    pub(crate) fn set_external(&mut self, i: usize, f: DVec2) {
+        if self.external.is_empty() {
+            if f == DVec2::ZERO {
+                return;
+            }
+            self.external = vec![DVec2::ZERO; self.x.len()];
+        }
+        self.external[i] = f;
+    }
+
+    /// Recomputes whether some external force is set, dropping the array when none is.
+    pub(crate) fn refresh_external(&mut self) {
+        let active = self.external.iter().any(|f| *f != DVec2::ZERO);
+        if !active && !self.external.is_empty() {
+            self.external = vec![];
+        }
+        if self.external_active != active {
+            self.external_active = active;
+        }
+    }
+
+    /// The drift buffer, sized to the particles (allocated on first use).
+    pub(crate) fn drift_buffer(&mut self) -> &mut Vec<DVec2> {
+        if self.drift.len() != self.x.len() {
+            self.drift = vec![DVec2::ZERO; self.x.len()];
+        }
+        &mut self.drift
     }
 
     /// Total mechanical energy: Σ ½m|v|² − Σ m g·x + Σ ½k(|xa−xb|−L)².

@@ -11,7 +11,6 @@
 use super::components::*;
 use super::params::SimParams;
 use super::solver::{PackedSpring, Solver};
-use bevy::ecs::entity::EntityHashMap;
 use bevy::ecs::system::SystemParam;
 use bevy::math::DVec2;
 use bevy::prelude::*;
@@ -52,17 +51,7 @@ type ParticleData<'a> = (
     &'a mut SolverIndex,
 );
 type Particles<'w, 's> = Query<'w, 's, ParticleData<'static>, (With<Particle>, Without<Spring>)>;
-type Springs<'w, 's> = Query<
-    'w,
-    's,
-    (
-        Entity,
-        Ref<'static, Spring>,
-        &'static CreationOrder,
-        &'static mut SolverIndex,
-    ),
-    Without<Particle>,
->;
+type Springs<'w, 's> = Query<'w, 's, (Entity, &'static Spring), Without<Particle>>;
 
 /// A particle's value edits: what the sync patches in place.
 type ParticleEdited = Or<(
@@ -90,12 +79,12 @@ pub fn sync_into_solver(
     params: Res<SimParams>,
     mut structure: StructureChanges,
     mut particles: Particles,
-    mut springs: Springs,
+    springs: Springs,
     mut edits: Edits,
 ) {
     if structure.any() {
         edits.released.clear();
-        rebuild(&mut solver, &mut particles, &mut springs);
+        rebuild(&mut solver, &mut particles, &springs);
         solver.apply_stiffness_override(params.stiffness_override);
         return;
     }
@@ -123,7 +112,7 @@ pub fn sync_into_solver(
             solver.touch();
         }
         if external.is_changed() {
-            solver.external[i] = external.0;
+            solver.set_external(i, external.0);
             external_changed = true;
         }
     }
@@ -134,109 +123,131 @@ pub fn sync_into_solver(
         solver.kinematic = kinematic;
     }
     if external_changed {
-        let active = solver.external.iter().any(|f| *f != DVec2::ZERO);
-        if solver.external_active != active {
-            solver.external_active = active;
-        }
+        solver.refresh_external();
     }
     let mut springs_changed = false;
     let mut endpoints_changed = false;
     for e in &edits.springs {
-        let Ok((_, spring, _, index)) = springs.get(e) else {
+        let Ok((_, spring)) = springs.get(e) else {
             continue;
         };
         springs_changed = true;
-        if index.0 == u32::MAX {
-            // Not packed (an endpoint was missing at the last rebuild): repack.
+        let end = |e: Entity| particles.get(e).ok().map(|p| p.8.0);
+        let packed =
+            (end(spring.a).zip(end(spring.b))).and_then(|(a, b)| solver.find_spring(a, b, e));
+        let Some(si) = packed else {
+            // Not packed under these ends (they changed, or one was missing at the last
+            // rebuild): repack.
             endpoints_changed = true;
             continue;
-        }
-        let endpoint = |e: Entity| particles.get(e).ok().map(|p| p.8.0);
-        let si = index.0 as usize;
-        let packed = &mut solver.springs[si];
-        if endpoint(spring.a) != Some(packed.a) || endpoint(spring.b) != Some(packed.b) {
-            endpoints_changed = true;
-        }
-        packed.rest = spring.rest;
-        solver.own_stiffness[si] = spring.stiffness;
+        };
+        solver.springs[si].rest = spring.rest;
+        solver.set_own_stiffness(si, spring.stiffness);
     }
     if endpoints_changed {
-        rebuild(&mut solver, &mut particles, &mut springs);
+        rebuild(&mut solver, &mut particles, &springs);
     }
     if springs_changed || solver.applied_override != params.stiffness_override {
         solver.apply_stiffness_override(params.stiffness_override);
     }
 }
 
-/// Repacks every particle and spring. Springs whose endpoints are not both
-/// particles are left out.
-fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &mut Springs) {
-    let mut order: Vec<(CreationOrder, Entity)> = particles.iter().map(|p| (*p.1, p.0)).collect();
+/// Repacks every particle and spring. Springs whose endpoints are not both particles are left
+/// out.
+///
+/// Built for millions of springs: no hash maps (particles are ranked by creation order through
+/// their query positions, a spring's ends are read from their [`SolverIndex`]), and the springs
+/// are sorted through a permutation applied in place, so that the temporaries are a few bytes
+/// per spring beside the packed arrays themselves.
+fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &Springs) {
+    // Rank the particles by creation order: rank[j] is the dense index of the j-th in query
+    // order (which stays the same until the archetypes change, not within this system).
+    let mut order: Vec<(CreationOrder, u32)> = (particles.iter().enumerate())
+        .map(|(j, p)| (*p.1, j as u32))
+        .collect();
     order.sort_unstable();
     let n = order.len();
-    let mut index: EntityHashMap<u32> = EntityHashMap::default();
-    index.reserve(n);
-    let mut entities = Vec::with_capacity(n);
-    for (i, &(_, e)) in order.iter().enumerate() {
-        index.insert(e, i as u32);
-        entities.push(e);
+    let mut rank = vec![0u32; n];
+    for (i, &(_, j)) in order.iter().enumerate() {
+        rank[j as usize] = i as u32;
     }
+    drop(order);
     let (mut x, mut v, mut mass, mut inv_mass) = (
         vec![DVec2::ZERO; n],
         vec![DVec2::ZERO; n],
         vec![1.0; n],
         vec![1.0; n],
     );
-    let mut external = vec![DVec2::ZERO; n];
-    let mut kinematic = 0;
-    for (e, _, pos, vel, m, ext, pinned, held, mut solver_index) in particles.iter_mut() {
-        let i = index[&e] as usize;
+    let mut entities = vec![Entity::PLACEHOLDER; n];
+    let (mut kinematic, mut external_active) = (0, false);
+    for (j, (e, _, pos, vel, m, ext, pinned, held, mut solver_index)) in
+        particles.iter_mut().enumerate()
+    {
+        let i = rank[j] as usize;
         solver_index.0 = i as u32;
+        entities[i] = e;
         x[i] = pos.0;
         v[i] = if pinned { DVec2::ZERO } else { vel.0 };
         mass[i] = m.0;
         inv_mass[i] = inverse_mass(m.0, pinned || held);
-        external[i] = ext.0;
+        external_active |= ext.0 != DVec2::ZERO;
         kinematic += held as usize;
     }
+    drop(rank);
+    // The external forces are stored only while one is set (a second pass, then).
+    let mut external = vec![];
+    if external_active {
+        external = vec![DVec2::ZERO; n];
+        for (_, _, _, _, _, ext, _, _, index) in particles.iter() {
+            external[index.0 as usize] = ext.0;
+        }
+    }
 
-    let mut packed: Vec<(CreationOrder, Entity, PackedSpring)> = springs
-        .iter()
-        .filter_map(|(e, s, order, _)| {
-            let (a, b) = (*index.get(&s.a)?, *index.get(&s.b)?);
-            let spring = PackedSpring {
+    // A spring's ends by entity index: a plain array, not a query lookup per end (which
+    // fetches every term of the particle query, and dominated the repack of a big cloth).
+    // `entities` confirms the generation, so a stale end reads as missing.
+    let top = entities.iter().map(|e| e.index_u32() as usize + 1).max();
+    let mut by_index = vec![u32::MAX; top.unwrap_or(0)];
+    for (i, e) in entities.iter().enumerate() {
+        by_index[e.index_u32() as usize] = i as u32;
+    }
+    let end = |e: Entity| {
+        let i = *by_index.get(e.index_u32() as usize)?;
+        (i != u32::MAX && entities[i as usize] == e).then_some(i)
+    };
+    // Sized once: the query knows its length.
+    let m = springs.iter().size_hint().1.unwrap_or(0);
+    let (mut packed, mut spring_entities) = (Vec::with_capacity(m), Vec::with_capacity(m));
+    for (e, s) in springs {
+        if let (Some(a), Some(b)) = (end(s.a), end(s.b)) {
+            packed.push(PackedSpring {
                 a,
                 b,
                 rest: s.rest,
                 k: s.stiffness,
-            };
-            Some((*order, e, spring))
-        })
-        .collect();
-    // Grouped by first end, then second (ties by creation): the spring pass then sums each
+            });
+            spring_entities.push(e);
+        }
+    }
+    // Grouped by first end, then second (ties by entity): the spring pass then sums each
     // particle's run of springs in a register, and repeated second ends lie a few springs
     // apart, so no update waits on the previous one's store (see `kernels::scatter_pairs`).
-    packed.sort_unstable_by_key(|p| (p.2.a, p.2.b, p.0));
-    let mut spring_index: EntityHashMap<u32> = EntityHashMap::default();
-    spring_index.extend(packed.iter().enumerate().map(|(i, p)| (p.1, i as u32)));
-    for (e, _, _, mut solver_index) in springs.iter_mut() {
-        solver_index.0 = spring_index.get(&e).copied().unwrap_or(u32::MAX);
-    }
+    sort_springs(&mut packed, &mut spring_entities);
 
     *solver = Solver {
         entities,
         f: vec![DVec2::ZERO; n],
-        external_active: external.iter().any(|f| *f != DVec2::ZERO),
+        external_active,
         external,
         kinematic,
-        drift: v.clone(),
+        drift: vec![],
         x,
         v,
         mass,
         inv_mass,
-        spring_entities: packed.iter().map(|p| p.1).collect(),
-        own_stiffness: packed.iter().map(|p| p.2.k).collect(),
-        springs: packed.into_iter().map(|p| p.2).collect(),
+        spring_entities,
+        own_stiffness: vec![],
+        springs: packed,
         applied_override: None,
         non_finite: false,
         scratch: Default::default(),
@@ -247,6 +258,59 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &mut Springs
         projective: std::mem::take(&mut solver.projective),
         xpbd: std::mem::take(&mut solver.xpbd),
     };
+}
+
+/// Sorts the packed springs and their entities together by (a, b, entity).
+///
+/// Springs usually arrive nearly sorted (a generator emits them cell by cell, each a few places
+/// from its sorted position), so an insertion sort of the two arrays in place does it in one
+/// pass with no extra memory. When it has moved more than a few places per spring the input is
+/// not nearly sorted, and a permutation sort finishes the job.
+fn sort_springs(springs: &mut [PackedSpring], entities: &mut [Entity]) {
+    let key = |s: &PackedSpring, e: Entity| (s.a, s.b, e);
+    let budget = 8 * springs.len();
+    let mut moves = 0;
+    for i in 1..springs.len() {
+        let mut j = i;
+        while j > 0 && key(&springs[j - 1], entities[j - 1]) > key(&springs[j], entities[j]) {
+            springs.swap(j - 1, j);
+            entities.swap(j - 1, j);
+            j -= 1;
+            moves += 1;
+        }
+        if moves > budget {
+            let mut perm: Vec<u32> = (0..springs.len() as u32).collect();
+            perm.sort_unstable_by_key(|&i| key(&springs[i as usize], entities[i as usize]));
+            let mut seen = vec![];
+            permute(springs, &perm, &mut seen);
+            permute(entities, &perm, &mut seen);
+            return;
+        }
+    }
+}
+
+/// Reorders `items` in place so that `items[k]` becomes the old `items[perm[k]]`, following the
+/// permutation's cycles (`seen`, a bit per item, is scratch): no second copy of the array.
+fn permute<T: Copy>(items: &mut [T], perm: &[u32], seen: &mut Vec<u64>) {
+    seen.clear();
+    seen.resize(items.len().div_ceil(64), 0);
+    for start in 0..items.len() {
+        if seen[start / 64] >> (start % 64) & 1 == 1 {
+            continue;
+        }
+        let first = items[start];
+        let mut k = start;
+        loop {
+            seen[k / 64] |= 1 << (k % 64);
+            let next = perm[k] as usize;
+            if next == start {
+                items[k] = first;
+                break;
+            }
+            items[k] = items[next];
+            k = next;
+        }
+    }
 }
 
 /// 1/m, or 0 for a particle that forces do not move (pinned, or held by the user).
@@ -283,6 +347,54 @@ pub fn sync_from_solver(
             pos.bypass_change_detection().0 = solver.x[i];
             vel.bypass_change_detection().0 = solver.v[i];
             force.bypass_change_detection().0 = solver.f[i];
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Both paths of the sort (nearly sorted, and scrambled past the insertion budget) give
+    /// the order of a plain sort, with each entity still beside its spring.
+    #[test]
+    fn springs_sort_by_ends_with_their_entities() {
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move |n: u64| {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed % n) as u32
+        };
+        for scrambled in [false, true] {
+            let n = 5000;
+            let mut springs: Vec<PackedSpring> = (0..n)
+                .map(|i| {
+                    let a = if scrambled {
+                        next(700)
+                    } else {
+                        i / 4 + next(2)
+                    };
+                    PackedSpring {
+                        a,
+                        b: a + 1 + next(3),
+                        rest: i as f64,
+                        k: 1.0,
+                    }
+                })
+                .collect();
+            let mut entities: Vec<Entity> = (0..n)
+                .map(|i| Entity::from_raw_u32(i + 1).unwrap())
+                .collect();
+            let mut expected: Vec<(PackedSpring, Entity)> = springs
+                .iter()
+                .copied()
+                .zip(entities.iter().copied())
+                .collect();
+            expected.sort_by_key(|(s, e)| (s.a, s.b, *e));
+            sort_springs(&mut springs, &mut entities);
+            let got: Vec<(PackedSpring, Entity)> = springs.into_iter().zip(entities).collect();
+            assert_eq!(got, expected, "scrambled: {scrambled}");
         }
     }
 }

@@ -331,6 +331,7 @@ pub fn step(
     ground: Option<f64>,
     threads: &SolverThreads,
 ) {
+    s.drift_buffer();
     let mut xp = std::mem::take(&mut s.xpbd);
     if xp.revision != Some(s.revision) || xp.constraints.len() != s.springs.len() {
         xp.colour(s);

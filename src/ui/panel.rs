@@ -89,10 +89,7 @@ pub fn side_panel(
     );
     if let Some(scene) = scene.as_ref().filter(|s| s.is_changed()) {
         // Show the new scene's stiffness: its first spring's, else what a click would use.
-        let e = &scene.0.expanded;
-        state.stiffness = e
-            .springs
-            .first()
+        state.stiffness = (scene.0.scene.spring_defs().next())
             .map(|s| s.stiffness)
             .or(scene.0.scene.click.map(|c| c.stiffness))
             .unwrap_or(DEFAULT_STIFFNESS)
