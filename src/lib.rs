@@ -62,6 +62,7 @@ pub mod bench;
 pub mod runner;
 pub mod scene;
 pub mod sim;
+pub mod solver;
 #[cfg(feature = "gui")]
 pub mod ui;
 

@@ -61,10 +61,7 @@ fn converged_projective_dynamics_is_converged_newton_backward_euler() {
                 ..Default::default()
             },
         );
-        newton.insert_resource(CgSettings {
-            tolerance: 1e-15,
-            max_iterations: 2000,
-        });
+        newton.insert_resource(CgSettings::new(1e-15, 2000));
         for step in 1..=10 {
             common::step(&mut pd, 1);
             common::step(&mut newton, 1);
@@ -98,10 +95,7 @@ fn newton_steps_converge_to_backward_euler() {
                 ..Default::default()
             },
         );
-        app.insert_resource(CgSettings {
-            tolerance: 1e-14,
-            max_iterations: 2000,
-        });
+        app.insert_resource(CgSettings::new(1e-14, 2000));
         common::step(&mut app, 5);
         solver(&app).x().to_vec()
     };

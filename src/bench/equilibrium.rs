@@ -4,9 +4,9 @@
 //! spring stiffness (compressed springs' transverse term dropped, so H stays positive
 //! semi-definite) and a backtracking line search on U. Pinned particles stay where they are.
 
-use crate::sim::kernels;
-use crate::sim::stiffness::{self, Block};
 use crate::sim::{PackedSpring, Solver};
+use crate::solver::kernels;
+use crate::solver::stiffness::{self, Block};
 use bevy::math::DVec2;
 
 /// The forces −∇U at x: body forces plus springs, zero on fixed particles.

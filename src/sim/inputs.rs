@@ -7,9 +7,8 @@
 //! is drawn. Mended, the status goes back to running (still paused).
 
 use super::components::{Mass, Particle, Spring};
-use super::integrators::CgSettings;
 pub use super::params::InputProblem;
-use super::params::{Iterations, SimParams, SimStatus};
+use super::params::{CgSettings, Iterations, SimParams, SimStatus};
 use super::schedule::TickPlan;
 use bevy::prelude::*;
 
@@ -61,7 +60,7 @@ pub fn check_params(p: &SimParams) -> Option<InputProblem> {
         return Some(problem("SimParams.tear", s, POSITIVE));
     }
     if let Some((field, v)) = p.iterations.out_of_range() {
-        let field = Iterations::PARAM_FIELDS[field];
+        let field = super::params::ITERATION_FIELDS[field];
         return Some(problem(field, v as f64, Iterations::RULE));
     }
     None

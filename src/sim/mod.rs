@@ -1,35 +1,27 @@
-//! The simulation as a Bevy plugin: the data model (components), the parameters and status
-//! (resources), the schedule (public system sets), and the read-only packed [`Solver`].
+//! The simulation as a Bevy plugin, around the solver core ([`crate::solver`]): the data model
+//! (components), the parameters and status (resources), the schedule (public system sets, in
+//! [`schedule`]: the one place that says when each pass runs), the sync between the entities
+//! and the packed state, and the read-only [`Solver`] resource.
 //!
-//! The solver's machinery (kernels, the AVX pass, the stiffness blocks, the thread splits, the
-//! integrators' scratch buffers, projective dynamics' factor, XPBD's colouring, the ECS sync) is
-//! private to the crate: it holds invariants
-//! (array lengths, index order, thread-part boundaries) that only the sync maintains, and it
-//! changes from release to release. Users change the simulation through components and
-//! resources, and read it through [`Solver`]'s accessors.
+//! The sync is private to the crate: it keeps the invariants (array lengths, index order) the
+//! core's passes rely on. Users change the simulation through components and resources, and
+//! read it through [`Solver`]'s accessors.
 
 pub mod components;
 pub mod grid;
 pub mod inputs;
-pub(crate) mod integrators;
-pub(crate) mod kernels;
-pub(crate) mod parallel;
 pub mod params;
 pub mod profile;
-pub(crate) mod projective;
 pub mod schedule;
 pub mod solver;
 pub mod stability;
-pub(crate) mod stiffness;
 pub(crate) mod sync;
 pub mod tear;
 pub mod watch;
-pub(crate) mod wide;
-pub(crate) mod xpbd;
 
+pub use crate::solver::PARALLEL_MIN_SPRINGS;
+pub use crate::solver::SolveStats;
 pub use components::*;
-pub use integrators::CgSettings;
-pub use parallel::{PARALLEL_MIN_SPRINGS, SolverThreads};
 pub use params::*;
 pub use profile::PassTimes;
 pub use schedule::{
@@ -38,5 +30,5 @@ pub use schedule::{
 };
 #[allow(deprecated)]
 pub use schedule::{PhysicsSet, StepSet};
-pub use solver::{Energy, PackedSpring, SolveStats, Solver};
-pub use stability::StabilityEstimate;
+pub use solver::{Energy, PackedSpring, Solver};
+pub use stability::{Stability, StabilityEstimate};

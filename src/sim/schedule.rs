@@ -6,13 +6,12 @@
 //! single-threaded executor; the ECS sync happens once per tick, not per step.
 
 use super::inputs;
-use super::integrators::{self, CgSettings};
-use super::kernels;
-use super::parallel::{self, SolverThreads};
 use super::params::*;
 use super::solver::Solver;
 use super::sync::{sync_from_solver, sync_into_solver};
 use super::tear;
+use crate::solver::kernels::Motion;
+use crate::solver::step;
 use bevy::app::{FixedMain, RunFixedMainLoop, RunFixedMainLoopSystems};
 use bevy::ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
 use bevy::prelude::*;
@@ -281,21 +280,9 @@ impl Plugin for SimPlugin {
                     )
                         .chain()
                         .in_set(StepSystems::Forces),
-                    (
-                        explicit_euler.run_if(
-                            integrator_is(Integrator::ExplicitEuler).and_then(not(sweep_fused)),
-                        ),
-                        symplectic_euler.run_if(
-                            integrator_is(Integrator::SymplecticEuler).and_then(not(sweep_fused)),
-                        ),
-                        velocity_verlet.run_if(integrator_is(Integrator::VelocityVerlet)),
-                        rk4.run_if(integrator_is(Integrator::Rk4)),
-                        implicit_euler.run_if(integrator_is(Integrator::ImplicitEuler)),
-                        projective_dynamics.run_if(integrator_is(Integrator::ProjectiveDynamics)),
-                        xpbd.run_if(integrator_is(Integrator::Xpbd)),
-                    )
-                        // One runs; chained, so that they are ordered for ambiguity detection.
-                        .chain()
+                    // The Euler methods' kick is part of the fused sweep when that runs.
+                    integrate
+                        .run_if(not(euler_method.and_then(sweep_fused)))
                         .in_set(StepSystems::Integrate),
                     damp_velocity
                         .run_if(damping_enabled.and_then(not(sweep_fused)))
@@ -337,6 +324,14 @@ pub fn integrator_is(which: Integrator) -> impl Fn(Res<SimParams>) -> bool + Clo
     move |params: Res<SimParams>| params.integrator == which
 }
 
+/// Run condition: the integrator is explicit or symplectic Euler, whose update is the kick.
+pub fn euler_method(params: Res<SimParams>) -> bool {
+    matches!(
+        params.integrator,
+        Integrator::ExplicitEuler | Integrator::SymplecticEuler
+    )
+}
+
 /// Run condition: the particle passes run as one fused sweep ([`ParticleSweep`]).
 pub fn sweep_fused(sweep: Res<ParticleSweep>) -> bool {
     sweep.fused
@@ -352,7 +347,7 @@ pub fn ground_enabled(params: Res<SimParams>) -> bool {
     params.ground.is_some()
 }
 
-// ---- the passes ----
+// ---- the passes: each system runs one of the core's passes ([`crate::solver::step`]) ----
 
 fn apply_gravity(
     mut solver: ResMut<Solver>,
@@ -360,16 +355,7 @@ fn apply_gravity(
     threads: Res<SolverThreads>,
     mut n: ResMut<PassCounts>,
 ) {
-    let s = &mut *solver;
-    let external = s.external_active.then_some(&s.external[..]);
-    integrators::body_forces(
-        &threads,
-        s.springs.len(),
-        &mut s.f,
-        &s.mass,
-        external,
-        params.gravity,
-    );
+    step::body_forces(&mut solver.state, params.gravity, &threads);
     n.gravity += 1;
 }
 
@@ -379,111 +365,34 @@ fn accumulate_spring_forces(
     mut n: ResMut<PassCounts>,
 ) {
     let s = &mut *solver;
-    parallel::accumulate_spring_forces(&threads, &mut s.spring_buffers, &mut s.f, &s.x, &s.springs);
+    step::spring_forces(&mut s.state, &mut s.work, &threads);
     n.springs += 1;
 }
 
-/// v += dt f / m (the Euler methods' velocity update), in parallel chunks when worthwhile.
-fn kick(s: &mut Solver, dt: f64, threads: &SolverThreads) {
-    let data = (&mut s.v[..], &s.f[..], &s.inv_mass[..]);
-    threads.each(s.springs.len(), data, |(v, f, w)| {
-        kernels::kick(v, f, w, dt)
-    });
-}
-
-fn explicit_euler(
-    mut solver: ResMut<Solver>,
-    params: Res<SimParams>,
-    threads: Res<SolverThreads>,
-    mut n: ResMut<PassCounts>,
-) {
-    let s = &mut *solver;
-    s.drift_buffer();
-    s.drift.copy_from_slice(&s.v);
-    kick(s, params.dt, &threads);
-    n.integrate += 1;
-}
-
-fn symplectic_euler(
-    mut solver: ResMut<Solver>,
-    params: Res<SimParams>,
-    threads: Res<SolverThreads>,
-    mut n: ResMut<PassCounts>,
-) {
-    kick(&mut solver, params.dt, &threads);
-    n.integrate += 1;
-}
-
-fn velocity_verlet(
-    mut solver: ResMut<Solver>,
-    params: Res<SimParams>,
-    threads: Res<SolverThreads>,
-    mut n: ResMut<PassCounts>,
-) {
-    integrators::velocity_verlet(&mut solver, params.dt, params.gravity, &threads);
-    n.integrate += 1;
-}
-
-fn rk4(
-    mut solver: ResMut<Solver>,
-    params: Res<SimParams>,
-    threads: Res<SolverThreads>,
-    mut n: ResMut<PassCounts>,
-) {
-    integrators::rk4(&mut solver, params.dt, params.gravity, &threads);
-    n.integrate += 1;
-}
-
-fn implicit_euler(
+/// The integrator's update, for whichever integrator the run condition selected.
+fn integrate(
     mut solver: ResMut<Solver>,
     params: Res<SimParams>,
     settings: Res<CgSettings>,
     threads: Res<SolverThreads>,
     mut n: ResMut<PassCounts>,
 ) {
-    let newton = params.iterations.newton;
-    integrators::implicit_euler(
-        &mut solver,
-        params.dt,
-        *settings,
-        newton,
-        params.gravity,
-        &threads,
-    );
-    n.integrate += 1;
-}
-
-fn projective_dynamics(
-    mut solver: ResMut<Solver>,
-    params: Res<SimParams>,
-    threads: Res<SolverThreads>,
-    mut n: ResMut<PassCounts>,
-) {
-    let iterations = params.iterations.projective;
-    if let Err(e) = super::projective::step(&mut solver, params.dt, iterations, &threads) {
-        // Only when memory runs out: with m > 0 and k >= 0 (checked) M + h²L is positive
-        // definite. The step is refused like a blow-up, which pauses with the last good state.
-        eprintln!("hooke: {e}");
-        solver.non_finite = true;
+    let method = step::Method {
+        integrator: params.integrator,
+        dt: params.dt,
+        gravity: params.gravity,
+        ground: params.ground,
+        iterations: params.iterations,
+        cg: settings.0,
+    };
+    let s = &mut *solver;
+    if let Err(e) = step::integrate(&mut s.state, &mut s.work, &method, &threads) {
+        // Only when memory runs out: with m > 0 and k >= 0 (checked) projective dynamics'
+        // M + h²L is positive definite. The step is refused like a blow-up, which pauses with
+        // the last good state.
+        error!("hooke: {e}");
+        s.state.non_finite = true;
     }
-    n.integrate += 1;
-}
-
-fn xpbd(
-    mut solver: ResMut<Solver>,
-    params: Res<SimParams>,
-    threads: Res<SolverThreads>,
-    mut n: ResMut<PassCounts>,
-) {
-    let it = params.iterations;
-    super::xpbd::step(
-        &mut solver,
-        params.dt,
-        it.xpbd_substeps,
-        it.xpbd_sweeps,
-        params.ground,
-        &threads,
-    );
     n.integrate += 1;
 }
 
@@ -493,9 +402,7 @@ fn damp_velocity(
     threads: Res<SolverThreads>,
     mut n: ResMut<PassCounts>,
 ) {
-    let s = &mut *solver;
-    let (mu, dt) = (params.damping, params.dt);
-    threads.each(s.springs.len(), &mut s.v[..], |v| kernels::damp(v, mu, dt));
+    step::damp(&mut solver.state, params.damping, params.dt, &threads);
     n.damping += 1;
 }
 
@@ -506,11 +413,7 @@ fn ground_contact(
     mut n: ResMut<PassCounts>,
 ) {
     let Some(ground) = params.ground else { return };
-    let s = &mut *solver;
-    let data = (&mut s.x[..], &mut s.v[..], &s.inv_mass[..]);
-    threads.each(s.springs.len(), data, |(x, v, w)| {
-        kernels::ground_contact(x, v, w, ground)
-    });
+    step::ground(&mut solver.state, ground, &threads);
     n.ground += 1;
 }
 
@@ -520,32 +423,8 @@ fn advance_positions(
     threads: Res<SolverThreads>,
     mut n: ResMut<PassCounts>,
 ) {
-    let s = &mut *solver;
-    let drift = match motion(params.integrator) {
-        kernels::Motion::ExplicitEuler | kernels::Motion::Drift => &s.drift,
-        kernels::Motion::SymplecticEuler | kernels::Motion::EndVelocity => &s.v,
-    };
-    let dt = params.dt;
-    let finite = threads.chunked(
-        s.springs.len(),
-        (&mut s.x[..], &drift[..], &s.v[..]),
-        |(x, u, v)| kernels::advance(x, u, v, dt),
-        |a, b| a & b,
-    );
-    s.non_finite = !finite;
+    step::advance(&mut solver.state, params.integrator, params.dt, &threads);
     n.advance += 1;
-}
-
-/// How an integrator's step ends: with the Euler kick or without, and which velocity moves the
-/// particles (the position update's drift).
-fn motion(integrator: Integrator) -> kernels::Motion {
-    use kernels::Motion;
-    match integrator {
-        Integrator::ExplicitEuler => Motion::ExplicitEuler,
-        Integrator::SymplecticEuler => Motion::SymplecticEuler,
-        Integrator::ImplicitEuler | Integrator::ProjectiveDynamics => Motion::EndVelocity,
-        Integrator::VelocityVerlet | Integrator::Rk4 | Integrator::Xpbd => Motion::Drift,
-    }
 }
 
 /// The fused particle sweep ([`ParticleSweep`]): the Euler kick, damping, ground and the
@@ -556,29 +435,12 @@ fn particle_sweep(
     threads: Res<SolverThreads>,
     mut n: ResMut<PassCounts>,
 ) {
-    let s = &mut *solver;
-    let dt = params.dt;
-    let sweep = kernels::Sweep {
-        motion: motion(params.integrator),
-        decay: (params.damping != 0.0).then(|| (-params.damping * dt).exp()),
-        ground: params.ground,
-    };
-    let drift = match sweep.motion {
-        kernels::Motion::Drift => &s.drift[..],
-        // Not read: any array of the particles' length.
-        _ => &s.f[..],
-    };
-    let data = (&mut s.x[..], &mut s.v[..], &s.f[..], &s.inv_mass[..], drift);
-    let finite = threads.chunked(
-        s.springs.len(),
-        data,
-        |data| kernels::particle_sweep(data, dt, sweep),
-        |a, b| a & b,
-    );
-    s.non_finite = !finite;
+    let (integrator, dt) = (params.integrator, params.dt);
+    let (mu, ground) = (params.damping, params.ground);
+    let sweep = step::sweep(&mut solver.state, integrator, dt, mu, ground, &threads);
     let kicked = matches!(
         sweep.motion,
-        kernels::Motion::ExplicitEuler | kernels::Motion::SymplecticEuler
+        Motion::ExplicitEuler | Motion::SymplecticEuler
     );
     n.integrate += kicked as u64;
     n.damping += sweep.decay.is_some() as u64;

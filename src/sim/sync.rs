@@ -10,7 +10,8 @@
 
 use super::components::*;
 use super::params::SimParams;
-use super::solver::{PackedSpring, Solver};
+use super::solver::Solver;
+use crate::solver::{PackedSpring, State};
 use bevy::ecs::system::SystemParam;
 use bevy::math::DVec2;
 use bevy::prelude::*;
@@ -234,8 +235,7 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &Springs) {
     // apart, so no update waits on the previous one's store (see `kernels::scatter_pairs`).
     sort_springs(&mut packed, &mut spring_entities);
 
-    *solver = Solver {
-        entities,
+    let state = State {
         f: vec![DVec2::ZERO; n],
         external_active,
         external,
@@ -245,18 +245,18 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &Springs) {
         v,
         mass,
         inv_mass,
-        spring_entities,
         own_stiffness: vec![],
         springs: packed,
         applied_override: None,
         non_finite: false,
-        scratch: Default::default(),
-        spring_buffers: Default::default(),
-        // The new revision makes the large-step methods redo their precomputation; their
-        // counters carry on.
-        revision: solver.revision.wrapping_add(1),
-        projective: std::mem::take(&mut solver.projective),
-        xpbd: std::mem::take(&mut solver.xpbd),
+        // The new revision makes the large-step methods redo their precomputation.
+        revision: solver.state.revision.wrapping_add(1),
+    };
+    *solver = Solver {
+        work: solver.work.repacked(),
+        state,
+        entities,
+        spring_entities,
     };
 }
 

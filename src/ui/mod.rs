@@ -52,7 +52,7 @@ impl Plugin for AppPlugin {
             .init_resource::<controls::HelpOverlay>()
             .init_resource::<plots::Timeline>()
             .init_resource::<crate::sim::watch::EnergyWatch>()
-            .init_resource::<crate::sim::StabilityEstimate>()
+            .init_resource::<crate::sim::Stability>()
             .add_systems(Startup, (view::spawn_camera, draw::spawn_batches))
             .add_systems(Startup, move |world: &mut World| {
                 load_into_world(world, &scene);

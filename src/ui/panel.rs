@@ -70,7 +70,7 @@ pub fn side_panel(
     clock: Res<SimClock>,
     status: Res<SimStatus>,
     stats: Res<LiveStats>,
-    stability: Res<StabilityEstimate>,
+    stability: Res<Stability>,
     extra: PanelExtras,
 ) -> Result {
     let PanelExtras {

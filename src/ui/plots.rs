@@ -1,7 +1,7 @@
 //! The panel's plots: the energy over the last [`WINDOW`] seconds of simulated time, by kind,
 //! and h·ω_max against the integrator's stability limit.
 
-use crate::sim::{Energy, SimClock, SimParams, Solver, StabilityEstimate};
+use crate::sim::{Energy, SimClock, SimParams, Solver, Stability, StabilityEstimate};
 use bevy::prelude::*;
 use bevy_egui::egui;
 use egui_plot::{HLine, Line, Plot};
@@ -36,7 +36,7 @@ pub fn sample(
     clock: Res<SimClock>,
     solver: Res<Solver>,
     params: Res<SimParams>,
-    stability: Res<StabilityEstimate>,
+    stability: Res<Stability>,
     mut timeline: ResMut<Timeline>,
 ) {
     if solver.is_changed() || params.is_changed() {

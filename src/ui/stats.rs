@@ -1,7 +1,7 @@
 //! Live figures for the panel: steps per second and real-time factor, measured over the last
 //! half second of wall time.
 
-use crate::sim::{SimClock, SimParams, Solver, StabilityEstimate, stability};
+use crate::sim::{SimClock, SimParams, Solver, Stability, stability};
 use bevy::prelude::*;
 use std::time::Instant;
 
@@ -55,7 +55,7 @@ pub fn measure(clock: Res<SimClock>, mut stats: ResMut<LiveStats>) {
 pub fn estimate_stability(
     params: Res<SimParams>,
     solver: Res<Solver>,
-    mut estimate: ResMut<StabilityEstimate>,
+    mut estimate: ResMut<Stability>,
     mut last: Local<Option<(Instant, usize, usize)>>,
 ) {
     let shape = (solver.particle_count(), solver.spring_count());
@@ -66,7 +66,7 @@ pub fn estimate_stability(
         }
     };
     if due {
-        estimate.set_if_neq(stability::estimate(&solver, &params));
+        estimate.set_if_neq(Stability(stability::estimate(&solver, &params)));
         *last = Some((Instant::now(), shape.0, shape.1));
     }
 }

@@ -10,8 +10,8 @@
 #![cfg(target_arch = "x86_64")]
 
 use super::kernels::{MIN_SPRING_LENGTH, Run, spring_force};
-use super::solver::PackedSpring;
-use bevy::math::DVec2;
+use super::state::PackedSpring;
+use glam::DVec2;
 use std::arch::x86_64::*;
 
 /// Does this CPU have AVX? (Detected once; later calls read a cached flag.)
@@ -114,7 +114,7 @@ unsafe fn four_forces(x: &[DVec2], s: &[PackedSpring], out: &mut [f64; 8]) -> i3
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::kernels::scatter_pairs;
+    use crate::solver::kernels::scatter_pairs;
 
     /// Forces from the AVX pass and the scalar pass, for springs of every kind: runs sharing an
     /// end, a zero-length spring, one with a NaN end, and a tail that is not a whole quad.

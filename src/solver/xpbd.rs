@@ -20,9 +20,9 @@
 //! thread. (Jacobi with averaging would need no colouring, but it converges more slowly, by a
 //! factor that grows with the number of constraints on a particle.)
 
-use super::parallel::SolverThreads;
-use super::solver::Solver;
-use bevy::math::DVec2;
+use super::parallel::Threads;
+use super::state::State;
+use glam::DVec2;
 
 /// A constraint in colour order: the packed spring's ends and rest length, and the projection's
 /// coefficients at the current substep size, so that the sweep reads no inverse masses and
@@ -54,7 +54,7 @@ struct Multiplier {
 /// The colouring and buffers, kept from step to step.
 #[derive(Debug, Default, Clone)]
 pub struct Xpbd {
-    /// The [`Solver::revision`] the colouring is for.
+    /// The state revision the colouring is for.
     revision: Option<u64>,
     /// The revision and substep size (bits) the coefficients are for.
     coefficients: Option<(u64, u64)>,
@@ -87,7 +87,7 @@ impl Xpbd {
     /// Greedy colouring in packed order: each spring takes the lowest colour neither of its ends
     /// has yet. Within a colour the springs keep the packed order (by first end), which keeps
     /// the sweep's memory access local.
-    fn colour(&mut self, s: &Solver) {
+    fn colour(&mut self, s: &State) {
         let n = s.x.len();
         let mut used: Vec<u64> = vec![0; n]; // colours 0..64 taken at each particle
         let mut colour_of = Vec::with_capacity(s.springs.len());
@@ -145,7 +145,7 @@ impl Xpbd {
     }
 
     /// The projections' coefficients for substeps of `hs` (see [`Constraint`]).
-    fn prepare(&mut self, s: &Solver, hs: f64) {
+    fn prepare(&mut self, s: &State, hs: f64) {
         let key = (s.revision, hs.to_bits());
         if self.coefficients == Some(key) {
             return;
@@ -324,15 +324,15 @@ fn project_with_multipliers(
 /// One XPBD step (see the module docs): sets v to the end velocity and the drift to the mean
 /// velocity over the step. `s.f` holds the body forces.
 pub fn step(
-    s: &mut Solver,
+    s: &mut State,
+    xp: &mut Xpbd,
     dt: f64,
     substeps: u32,
     sweeps: u32,
     ground: Option<f64>,
-    threads: &SolverThreads,
+    threads: &Threads,
 ) {
     s.drift_buffer();
-    let mut xp = std::mem::take(&mut s.xpbd);
     if xp.revision != Some(s.revision) || xp.constraints.len() != s.springs.len() {
         xp.colour(s);
     }
@@ -410,13 +410,12 @@ pub fn step(
     });
     xp.sweeps += substeps as u64 * sweeps as u64;
     xp.steps += 1;
-    s.xpbd = xp;
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::solver::PackedSpring;
+    use crate::solver::state::PackedSpring;
 
     /// The AVX sweep gives the scalar sweep's positions bit for bit, on a colour of disjoint
     /// constraints of assorted lengths (one of zero length) and coefficients.
@@ -465,8 +464,8 @@ mod tests {
     fn zero_compliance_holds_a_chain_at_its_rest_length() {
         let (n, rest, dt) = (12usize, 0.05, 1.0 / 60.0);
         for threads in [1, 2] {
-            let threads = SolverThreads::new(threads).unwrap();
-            let mut s = Solver::default();
+            let threads = Threads::new(threads).unwrap();
+            let (mut s, mut xp) = (State::default(), Xpbd::default());
             for i in 0..=n {
                 // Start bent (at 45°) so that the chain swings.
                 let d = DVec2::new(1.0, -1.0).normalize() * (rest * i as f64);
@@ -491,7 +490,7 @@ mod tests {
                 .collect();
             let mut worst: f64 = 0.0;
             for _ in 0..120 {
-                step(&mut s, dt, 20, 200, None, &threads);
+                step(&mut s, &mut xp, dt, 20, 200, None, &threads);
                 for i in 0..s.x.len() {
                     s.x[i] += s.drift[i] * dt;
                 }
@@ -509,7 +508,7 @@ mod tests {
                 swing.abs() < rest * n as f64,
                 "the chain went somewhere odd"
             );
-            assert_eq!(s.xpbd.colours(), 2, "a chain needs two colours");
+            assert_eq!(xp.colours(), 2, "a chain needs two colours");
         }
     }
 }

@@ -1,10 +1,10 @@
 //! The step's kernels: plain loops over the solver's dense arrays, free of Bevy.
 //!
 //! Each function is one pass of the step (see the README's step semantics); the systems in
-//! [`crate::sim::schedule`] call them in order.
+//! [`super::step`] calls them in order.
 
-use super::solver::PackedSpring;
-use bevy::math::DVec2;
+use super::state::PackedSpring;
+use glam::DVec2;
 
 /// Springs shorter than this exert no force: their direction is undefined.
 pub const MIN_SPRING_LENGTH: f64 = 1e-12;
@@ -69,7 +69,7 @@ pub fn scatter_pairs(
 /// [`super::stiffness::apply`]).
 ///
 /// Consecutive springs that share their end a (the packed springs are sorted by it, see
-/// [`super::sync`]) sum their contributions to a in a register and hand them over once. Adding
+/// the Bevy layer's sync) sum their contributions to a in a register and hand them over once. Adding
 /// each to memory, spring after spring, makes every update wait for the previous one's store.
 pub struct Run {
     a: usize,

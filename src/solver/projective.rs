@@ -22,9 +22,8 @@
 //! with v1 = (x1 − x0)/h; damping, ground contact and the position update follow as for
 //! implicit Euler.
 
-use super::parallel::{PairPass, SolverThreads, SpringBuffers, scatter};
-use super::solver::{PackedSpring, Solver};
-use bevy::math::DVec2;
+use super::parallel::{PairPass, SpringBuffers, Threads, scatter};
+use super::state::{PackedSpring, State};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::SupernodalThreshold;
@@ -33,12 +32,13 @@ use faer::sparse::linalg::cholesky::{
 };
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Par, Side};
+use glam::DVec2;
 use std::time::Instant;
 
 /// What the factorisation was computed for: redone when any of it changes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct Key {
-    /// [`Solver::revision`]: the spring graph, stiffnesses, masses and pins.
+    /// the state's revision: the spring graph, stiffnesses, masses and pins.
     revision: u64,
     /// The time step's bits.
     dt: u64,
@@ -114,7 +114,7 @@ impl PairPass for LocalStep<'_> {
 
 impl Projective {
     /// Builds and factors M + h² L over the free particles when the key changed.
-    fn prepare(&mut self, s: &Solver, dt: f64, threads: &SolverThreads) -> Result<(), String> {
+    fn prepare(&mut self, s: &State, dt: f64, threads: &Threads) -> Result<(), String> {
         let key = Key {
             revision: s.revision,
             dt: dt.to_bits(),
@@ -332,7 +332,7 @@ impl Supernodes {
 
 /// The factorisation may share the pool on a big scene (it runs once); the substitutions run on
 /// the calling thread.
-fn parallelism(threads: &SolverThreads, springs: usize) -> Par {
+fn parallelism(threads: &Threads, springs: usize) -> Par {
     if threads.threads() > 1 && springs >= super::parallel::PARALLEL_MIN_SPRINGS {
         Par::rayon(threads.threads())
     } else {
@@ -343,21 +343,19 @@ fn parallelism(threads: &SolverThreads, springs: usize) -> Par {
 /// One projective dynamics step of `iterations` local/global iterations: sets v to
 /// (x1 − x0)/h for the free particles (see the module docs). `s.f` holds the body forces.
 pub fn step(
-    s: &mut Solver,
+    s: &mut State,
+    pd: &mut Projective,
     dt: f64,
     iterations: u32,
-    threads: &SolverThreads,
+    threads: &Threads,
 ) -> Result<(), String> {
-    let mut pd = std::mem::take(&mut s.projective);
-    let result = pd.prepare(s, dt, threads).map(|()| {
-        pd.run(s, dt, iterations, threads);
-    });
-    s.projective = pd;
-    result
+    pd.prepare(s, dt, threads)?;
+    pd.run(s, dt, iterations, threads);
+    Ok(())
 }
 
 impl Projective {
-    fn run(&mut self, s: &mut Solver, dt: f64, iterations: u32, threads: &SolverThreads) {
+    fn run(&mut self, s: &mut State, dt: f64, iterations: u32, threads: &Threads) {
         let h2 = dt * dt;
         let springs = s.springs.len();
         // z = x0 + h v0 (eliminated particles' final positions); M y = m (z + h² f/m).

@@ -4,13 +4,12 @@
 //! without atomics: the packed springs are split into one contiguous part per thread; a part
 //! writes its own slice of the output, the particles no other part touches, and records its
 //! contributions to the rest, which are added after (see [`scatter`]). Per-particle passes
-//! split the particle arrays into chunks ([`SolverThreads::chunked`]). Small scenes run
+//! split the particle arrays into chunks ([`Threads::chunked`]). Small scenes run
 //! serially: below [`PARALLEL_MIN_SPRINGS`] the cost of waking a thread exceeds the work.
 
 use super::kernels;
-use super::solver::PackedSpring;
-use bevy::math::DVec2;
-use bevy::prelude::*;
+use super::state::PackedSpring;
+use glam::DVec2;
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::Arc;
@@ -24,34 +23,35 @@ const PARTICLE_CHUNK: usize = 8192;
 /// The kernels' thread pool. `threads == 1` runs everything on the calling thread.
 ///
 /// ```
-/// # use hooke::sim::SolverThreads;
-/// let mut app = hooke::headless_app();
-/// app.insert_resource(SolverThreads::new(1).unwrap()); // everything on the calling thread
+/// # use hooke::solver::Threads;
+/// let two = Threads::new(2).unwrap();
+/// assert_eq!(two.threads(), 2);
+/// assert!(Threads::new(0).is_err());
 /// ```
-#[derive(Resource, Clone)]
-pub struct SolverThreads {
+#[derive(Clone)]
+pub struct Threads {
     threads: usize,
     pool: Option<Arc<rayon::ThreadPool>>,
 }
 
-impl std::fmt::Debug for SolverThreads {
+impl std::fmt::Debug for Threads {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "SolverThreads({})", self.threads)
+        write!(f, "Threads({})", self.threads)
     }
 }
 
-impl Default for SolverThreads {
+impl Default for Threads {
     /// All cores.
     fn default() -> Self {
         let n = std::thread::available_parallelism().map_or(1, |n| n.get());
-        Self::new(n).unwrap_or_else(|_| SolverThreads {
+        Self::new(n).unwrap_or_else(|_| Threads {
             threads: 1,
             pool: None,
         })
     }
 }
 
-impl SolverThreads {
+impl Threads {
     /// A pool of `threads` solver threads (1: no pool, everything on the calling thread).
     pub fn new(threads: usize) -> Result<Self, String> {
         if threads == 0 {
@@ -67,7 +67,7 @@ impl SolverThreads {
         } else {
             None
         };
-        Ok(SolverThreads { threads, pool })
+        Ok(Threads { threads, pool })
     }
 
     /// How many threads the passes use.
@@ -373,7 +373,7 @@ impl PairPass for SpringForces<'_> {
 
 /// f += Σ spring forces, each spring evaluated once, on the pool's threads when worthwhile.
 pub fn accumulate_spring_forces(
-    threads: &SolverThreads,
+    threads: &Threads,
     buffers: &mut SpringBuffers,
     f: &mut [DVec2],
     x: &[DVec2],
@@ -393,7 +393,7 @@ pub fn accumulate_spring_forces(
 /// `buffers` caches the split for these pairs; it is redone when their number or the thread
 /// count changes, and the solver starts new buffers whenever it repacks the springs.
 pub fn scatter<P: PairPass>(
-    threads: &SolverThreads,
+    threads: &Threads,
     buffers: &mut SpringBuffers,
     out: &mut [DVec2],
     pairs: &[P::Pair],
@@ -566,7 +566,7 @@ mod tests {
     fn chunked_passes_cover_the_arrays_in_matching_pieces() {
         let n = 100_003;
         let src: Vec<f64> = (0..n).map(|i| i as f64).collect();
-        let threads = SolverThreads::new(2).unwrap();
+        let threads = Threads::new(2).unwrap();
         for springs in [PARALLEL_MIN_SPRINGS, 10] {
             let (mut a, mut b) = (vec![0.0; n], vec![0.0; n]);
             let pieces = threads.chunked(
@@ -595,7 +595,7 @@ mod tests {
     /// K u through the threaded pair scatter gives the serial product up to round-off.
     #[test]
     fn threaded_stiffness_product_matches_the_serial_one() {
-        use crate::sim::stiffness;
+        use crate::solver::stiffness;
         let (n, springs) = (160 * 160, grid(160, 160));
         let x = positions(n);
         let mut blocks = vec![];
@@ -605,7 +605,7 @@ mod tests {
             .collect();
         let mut serial = vec![DVec2::ZERO; n as usize];
         stiffness::apply(&mut serial, &u, &blocks);
-        let threads = SolverThreads::new(2).unwrap();
+        let threads = Threads::new(2).unwrap();
         let (mut buffers, mut threaded_blocks) = (SpringBuffers::default(), vec![]);
         stiffness::blocks_threaded(&threads, &springs, &x, &mut threaded_blocks);
         assert_eq!(threaded_blocks, blocks);
@@ -636,7 +636,7 @@ mod tests {
             let mut serial = vec![DVec2::ZERO; n as usize];
             kernels::for_each_spring_force(&x, &springs, |i, v| serial[i] += v);
             for count in [2, 3] {
-                let threads = SolverThreads::new(count).unwrap();
+                let threads = Threads::new(count).unwrap();
                 let mut buffers = SpringBuffers::default();
                 let mut threaded = vec![DVec2::ZERO; n as usize];
                 accumulate_spring_forces(&threads, &mut buffers, &mut threaded, &x, &springs);

@@ -20,10 +20,10 @@
 //! (its Jacobian has no external term: an external force is taken as independent of x).
 
 use super::kernels::{apply_gravity, apply_gravity_and_external};
-use super::parallel::{SolverThreads, SpringBuffers};
-use super::solver::Solver;
+use super::parallel::{SpringBuffers, Threads};
+use super::state::State;
 use super::stiffness::{self, Block, Sym2};
-use bevy::math::DVec2;
+use glam::DVec2;
 
 /// Buffers the multi-stage methods reuse from step to step.
 #[derive(Debug, Default, Clone)]
@@ -34,6 +34,8 @@ pub struct Scratch {
     sum_a: Vec<DVec2>,
     stage_v: Vec<DVec2>,
     cg: Cg,
+    /// The pair passes' thread split (the force pass's and every stage's).
+    pub(crate) pairs: SpringBuffers,
     /// Implicit Euler's Newton steps so far, and its time steps.
     newton_steps: u64,
     newton_solves: u64,
@@ -48,6 +50,21 @@ impl Scratch {
     /// Mean Newton steps per implicit Euler step so far, if any were taken.
     pub fn newton_iterations_per_step(&self) -> Option<f64> {
         (self.newton_solves > 0).then(|| self.newton_steps as f64 / self.newton_solves as f64)
+    }
+
+    /// New buffers for a repacked state, keeping the counters.
+    pub(crate) fn repacked(&self) -> Scratch {
+        Scratch {
+            cg: Cg {
+                iterations: self.cg.iterations,
+                unconverged: self.cg.unconverged,
+                last_iterations: self.cg.last_iterations,
+                ..Cg::default()
+            },
+            newton_steps: self.newton_steps,
+            newton_solves: self.newton_solves,
+            ..Scratch::default()
+        }
     }
 
     fn fit(&mut self, n: usize) {
@@ -67,7 +84,7 @@ impl Scratch {
 /// evaluation (the schedule's gravity pass and every integrator stage). `external` is `None`
 /// when every external force is zero.
 pub fn body_forces(
-    threads: &SolverThreads,
+    threads: &Threads,
     springs: usize,
     f: &mut [DVec2],
     mass: &[f64],
@@ -85,19 +102,25 @@ pub fn body_forces(
 /// f(x) = m g + f_ext + Σ spring forces.
 ///
 /// A stage's evaluation: at the positions in `scratch.x`, into `scratch.f`.
-fn stage_forces(s: &mut Solver, g: DVec2, threads: &SolverThreads) {
+fn stage_forces(s: &State, sc: &mut Scratch, g: DVec2, threads: &Threads) {
     let external = s.external_active.then_some(&s.external[..]);
-    let (f, x) = (&mut s.scratch.f, &s.scratch.x);
+    let (f, x) = (&mut sc.f, &sc.x);
     body_forces(threads, s.springs.len(), f, &s.mass, external, g);
-    super::parallel::accumulate_spring_forces(threads, &mut s.spring_buffers, f, x, &s.springs);
+    super::parallel::accumulate_spring_forces(threads, &mut sc.pairs, f, x, &s.springs);
 }
 
 /// Velocity Verlet, kick-drift-kick, with a second force evaluation at x0 + dt v½.
-pub fn velocity_verlet(s: &mut Solver, dt: f64, gravity: DVec2, threads: &SolverThreads) {
-    s.scratch.fit(s.x.len());
+pub fn velocity_verlet(
+    s: &mut State,
+    sc: &mut Scratch,
+    dt: f64,
+    gravity: DVec2,
+    threads: &Threads,
+) {
+    sc.fit(s.x.len());
     s.drift_buffer();
     let (half, springs) = (0.5 * dt, s.springs.len());
-    let sc = &mut s.scratch;
+    let sc = &mut *sc;
     let data = (
         &mut s.drift[..],
         &mut sc.x[..],
@@ -113,8 +136,8 @@ pub fn velocity_verlet(s: &mut Solver, dt: f64, gravity: DVec2, threads: &Solver
             xs[i] = x[i] + v_half * dt;
         }
     });
-    stage_forces(s, gravity, threads);
-    let sc = &mut s.scratch;
+    stage_forces(s, sc, gravity, threads);
+    let sc = &mut *sc;
     let data = (&mut s.v[..], &s.drift[..], &sc.f[..], &s.inv_mass[..]);
     threads.each(springs, data, |(v, u, f, w)| {
         for i in 0..v.len() {
@@ -124,11 +147,11 @@ pub fn velocity_verlet(s: &mut Solver, dt: f64, gravity: DVec2, threads: &Solver
 }
 
 /// Classic RK4 on x' = v, v' = f(x)/m.
-pub fn rk4(s: &mut Solver, dt: f64, gravity: DVec2, threads: &SolverThreads) {
-    s.scratch.fit(s.x.len());
+pub fn rk4(s: &mut State, sc: &mut Scratch, dt: f64, gravity: DVec2, threads: &Threads) {
+    sc.fit(s.x.len());
     s.drift_buffer();
     let springs = s.springs.len();
-    let sc = &mut s.scratch;
+    let sc = &mut *sc;
     // Stage 1: (v0, a0).
     let data = (
         &mut sc.sum_u[..],
@@ -151,7 +174,7 @@ pub fn rk4(s: &mut Solver, dt: f64, gravity: DVec2, threads: &SolverThreads) {
     // Stages 2..4: evaluate at x0 + c dt k_x(prev), with k_v(prev) advancing the velocity.
     for (c, weight) in [(0.5, 2.0), (0.5, 2.0), (1.0, 1.0)] {
         let h = c * dt;
-        let sc = &mut s.scratch;
+        let sc = &mut *sc;
         let data = (
             &mut sc.x[..],
             &mut sc.stage_v[..],
@@ -166,8 +189,8 @@ pub fn rk4(s: &mut Solver, dt: f64, gravity: DVec2, threads: &SolverThreads) {
                 stage_v[i] = v[i] + ka * h;
             }
         });
-        stage_forces(s, gravity, threads);
-        let sc = &mut s.scratch;
+        stage_forces(s, sc, gravity, threads);
+        let sc = &mut *sc;
         let data = (
             &mut sc.f[..],
             &mut sc.sum_u[..],
@@ -183,7 +206,7 @@ pub fn rk4(s: &mut Solver, dt: f64, gravity: DVec2, threads: &SolverThreads) {
             }
         });
     }
-    let sc = &s.scratch;
+    let sc = &*sc;
     let data = (&mut s.drift[..], &mut s.v[..], &sc.sum_u[..], &sc.sum_a[..]);
     threads.each(springs, data, |(u, v, sum_u, sum_a)| {
         for i in 0..u.len() {
@@ -193,14 +216,9 @@ pub fn rk4(s: &mut Solver, dt: f64, gravity: DVec2, threads: &SolverThreads) {
     });
 }
 
-/// Settings of the implicit Euler solve.
-///
-/// ```
-/// # use hooke::sim::CgSettings;
-/// let mut app = hooke::headless_app();
-/// *app.world_mut().resource_mut::<CgSettings>() = CgSettings { tolerance: 1e-10, max_iterations: 2000 };
-/// ```
-#[derive(bevy::prelude::Resource, Debug, Clone, Copy, PartialEq)]
+/// Settings of the implicit Euler solve (the Bevy layer's resource is
+/// [`crate::sim::CgSettings`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CgSettings {
     /// Stop when |r| <= tolerance · |b| (relative residual of the linear system).
     pub tolerance: f64,
@@ -266,24 +284,25 @@ impl Cg {
 /// are projected out). K u and the vector updates share the solver threads like the explicit
 /// passes; the reductions sum per chunk, so the thread count changes the result by round-off.
 pub fn implicit_euler(
-    s: &mut Solver,
+    s: &mut State,
+    sc: &mut Scratch,
     dt: f64,
     settings: CgSettings,
     newton: u32,
     gravity: DVec2,
-    threads: &SolverThreads,
+    threads: &Threads,
 ) {
     let n = s.x.len();
     let springs = s.springs.len();
-    s.scratch.fit(n);
-    s.scratch.cg.fit(n, springs);
+    sc.fit(n);
+    sc.cg.fit(n, springs);
     let h2 = dt * dt;
     if newton > 1 {
-        s.scratch.stage_v.copy_from_slice(&s.v); // v0
+        sc.stage_v.copy_from_slice(&s.v); // v0
     }
 
     // Step 1: b = dt (f0 + dt K0 v0), zero on pinned particles, into z.
-    let cg = &mut s.scratch.cg;
+    let cg = &mut sc.cg;
     stiffness::blocks_threaded(threads, &s.springs, &s.x, &mut cg.blocks);
     stiffness::apply_threaded(threads, &mut cg.buffers, &mut cg.ap, &s.v, &cg.blocks); // K v0
     let data = (&mut cg.z[..], &s.f[..], &cg.ap[..], &s.inv_mass[..]);
@@ -305,16 +324,16 @@ pub fn implicit_euler(
         },
         |a, b| a + b,
     );
-    solve(s, h2, b_norm2.element_sum(), settings, threads);
+    solve(s, sc, h2, b_norm2.element_sum(), settings, threads);
     if newton > 1 {
         // The first step's Δv warm-starts the next time step's first solve.
-        let sc = &mut s.scratch;
+        let sc = &mut *sc;
         sc.sum_u.copy_from_slice(&sc.cg.dv);
     }
 
     for _ in 1..newton {
         // x_k = x0 + h v_k and f(x_k), into the stage buffers.
-        let sc = &mut s.scratch;
+        let sc = &mut *sc;
         threads.each(
             springs,
             (&mut sc.x[..], &s.x[..], &s.v[..]),
@@ -324,8 +343,8 @@ pub fn implicit_euler(
                 }
             },
         );
-        stage_forces(s, gravity, threads);
-        let sc = &mut s.scratch;
+        stage_forces(s, sc, gravity, threads);
+        let sc = &mut *sc;
         let cg = &mut sc.cg;
         stiffness::blocks_threaded(threads, &s.springs, &sc.x, &mut cg.blocks);
         // b = M (v0 − v_k) + h f(x_k); δ starts from 0.
@@ -357,9 +376,9 @@ pub fn implicit_euler(
             },
             |a, b| a + b,
         );
-        solve(s, h2, b_norm2.element_sum(), settings, threads);
+        solve(s, sc, h2, b_norm2.element_sum(), settings, threads);
     }
-    let sc = &mut s.scratch;
+    let sc = &mut *sc;
     if newton > 1 {
         sc.cg.dv.copy_from_slice(&sc.sum_u);
     }
@@ -370,9 +389,16 @@ pub fn implicit_euler(
 /// Solves (M − h² K) dv = b by preconditioned CG, K the blocks in `cg.blocks`, b in `cg.z`
 /// (|b|² = `b_norm2`), from the start in `cg.dv`, counts the iterations, and adds the solution
 /// to the velocities.
-fn solve(s: &mut Solver, h2: f64, b_norm2: f64, settings: CgSettings, threads: &SolverThreads) {
+fn solve(
+    s: &mut State,
+    sc: &mut Scratch,
+    h2: f64,
+    b_norm2: f64,
+    settings: CgSettings,
+    threads: &Threads,
+) {
     let springs = s.springs.len();
-    let cg = &mut s.scratch.cg;
+    let cg = &mut sc.cg;
     let sum_pairs = |a: (DVec2, DVec2), b: (DVec2, DVec2)| (a.0 + b.0, a.1 + b.1);
 
     // The preconditioner: the inverse of each particle's 2×2 diagonal block of A = M − h² K
@@ -491,7 +517,7 @@ fn solve(s: &mut Solver, h2: f64, b_norm2: f64, settings: CgSettings, threads: &
 /// ap = A u = M u + dt² K u from ap = K u (K the positive semi-definite stiffness), pinned rows
 /// held at 0; returns u · A u.
 fn apply_a(
-    threads: &SolverThreads,
+    threads: &Threads,
     springs: usize,
     ap: &mut [DVec2],
     u: &[DVec2],

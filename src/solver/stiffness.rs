@@ -8,9 +8,9 @@
 //! [`super::kernels::MIN_SPRING_LENGTH`] contribute nothing.
 
 use super::kernels::{self, MIN_SPRING_LENGTH};
-use super::parallel::{self, Pair, PairPass, SolverThreads, SpringBuffers};
-use super::solver::PackedSpring;
-use bevy::math::DVec2;
+use super::parallel::{self, Pair, PairPass, SpringBuffers, Threads};
+use super::state::PackedSpring;
+use glam::DVec2;
 
 /// One spring's block k α I + k (1 − α) d̂d̂ᵀ, with the spring's ends: all that applying K
 /// reads (32 bytes a spring, so that a 64×64 cloth's blocks stay in a core's L2 cache).
@@ -96,7 +96,7 @@ pub fn blocks(springs: &[PackedSpring], x: &[DVec2], out: &mut Vec<Block>) {
 
 /// [`blocks`] on the pool's threads when worthwhile.
 pub fn blocks_threaded(
-    threads: &SolverThreads,
+    threads: &Threads,
     springs: &[PackedSpring],
     x: &[DVec2],
     out: &mut Vec<Block>,
@@ -141,7 +141,7 @@ pub fn apply(out: &mut [DVec2], u: &[DVec2], blocks: &[Block]) {
 /// out = K u on the pool's threads when worthwhile (see [`parallel::scatter`]); `buffers`
 /// caches the split of these blocks.
 pub fn apply_threaded(
-    threads: &SolverThreads,
+    threads: &Threads,
     buffers: &mut SpringBuffers,
     out: &mut [DVec2],
     u: &[DVec2],

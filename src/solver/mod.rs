@@ -1,0 +1,35 @@
+//! The solver core: the packed state, the step's kernels and threads, and the integrators.
+//!
+//! It knows nothing of the engine: plain arrays of glam's `DVec2` and `f64`, rayon threads,
+//! faer's Cholesky. The Bevy layer ([`crate::sim`]) owns the entities, packs them into a
+//! [`State`] and runs the step's passes ([`step`], where the step's semantics are written
+//! down pass by pass) as systems in its public sets, as rapier's Bevy adapter runs rapier.
+//!
+//! * [`state`]: the packed arrays ([`State`], [`PackedSpring`]) and what is read from them
+//!   (energy, finiteness).
+//! * [`method`]: the integrators and their iteration counts.
+//! * [`step`]: the passes of one step, and the methods' buffers ([`Workspace`]).
+//! * [`stability`]: how close a scene is to its integrator's limit.
+//! * The machinery, private to the crate: the scalar and AVX kernels, the thread splits, the
+//!   stiffness blocks, the integrators' updates, projective dynamics' factor and XPBD's
+//!   colouring. They hold invariants (array lengths, index order, thread-part boundaries) that
+//!   only the packing maintains.
+
+pub(crate) mod integrators;
+pub(crate) mod kernels;
+pub mod method;
+pub(crate) mod parallel;
+pub(crate) mod projective;
+pub mod stability;
+pub mod state;
+pub mod step;
+pub(crate) mod stiffness;
+pub(crate) mod wide;
+pub(crate) mod xpbd;
+
+pub use integrators::CgSettings;
+pub use method::{Integrator, Iterations};
+pub use parallel::{PARALLEL_MIN_SPRINGS, Threads};
+pub use stability::StabilityEstimate;
+pub use state::{Energy, PackedSpring, State};
+pub use step::{Method, SolveStats, Workspace};

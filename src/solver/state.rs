@@ -1,0 +1,220 @@
+//! The packed state: the hot data of every particle and spring in dense arrays (structure of
+//! arrays, dense `u32` indices), which the step's kernels run on.
+//!
+//! It holds the simulation's numbers only. Who owns a particle (an ECS entity, a row of a
+//! file) is the adapter's business: the Bevy layer keeps the entities beside it
+//! ([`crate::sim::Solver`]) and rebuilds or patches it when they change.
+
+use glam::DVec2;
+
+/// A spring between two dense particle indices.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PackedSpring {
+    /// Dense index of one end.
+    pub a: u32,
+    /// Dense index of the other end.
+    pub b: u32,
+    /// Rest length, m.
+    pub rest: f64,
+    /// The stiffness in effect: the spring's own, or the global override.
+    pub k: f64,
+}
+
+/// The particles' and springs' packed arrays. Read it through the accessors; the adapter
+/// that owns it writes it, and the step's passes ([`super::step`]) step it.
+#[derive(Debug, Default)]
+pub struct State {
+    pub(crate) x: Vec<DVec2>,
+    pub(crate) v: Vec<DVec2>,
+    /// Force at the start of the current step.
+    pub(crate) f: Vec<DVec2>,
+    pub(crate) mass: Vec<f64>,
+    /// 1/m, and 0 for a pinned particle: the velocity update then leaves it at rest, with no
+    /// branch in the loop.
+    pub(crate) inv_mass: Vec<f64>,
+    /// Each particle's external force, added to gravity wherever forces are evaluated; stored
+    /// only while one is set (`external_active`), else empty.
+    pub(crate) external: Vec<DVec2>,
+    /// Some external force is non-zero. When false, the force passes skip `external` entirely.
+    pub(crate) external_active: bool,
+    /// How many particles are held kinematic (moved by the user, not by forces).
+    pub(crate) kinematic: usize,
+    /// The velocity the position update moves each particle with, for the integrators whose
+    /// drift is not the end velocity; empty until one of them runs ([`State::drift_buffer`]).
+    pub(crate) drift: Vec<DVec2>,
+    pub(crate) springs: Vec<PackedSpring>,
+    /// Each spring's own stiffness while a stiffness override replaces it in `springs`, so that
+    /// clearing the override restores it; empty while none is applied.
+    pub(crate) own_stiffness: Vec<f64>,
+    /// The stiffness override the packed `k` values reflect.
+    pub(crate) applied_override: Option<f64>,
+    /// Set by the position update when the step produced a non-finite position or velocity.
+    pub(crate) non_finite: bool,
+    /// Bumped whenever the spring graph, a stiffness, a mass or a pin changes: the methods
+    /// that precompute from these (projective dynamics' factor, XPBD's colouring) redo it.
+    pub(crate) revision: u64,
+}
+
+/// Read access: the adapter writes the state and the passes step it.
+impl State {
+    /// Positions, m.
+    pub fn x(&self) -> &[DVec2] {
+        &self.x
+    }
+    /// Velocities, m/s.
+    pub fn v(&self) -> &[DVec2] {
+        &self.v
+    }
+    /// The force on each particle at the start of the last step, N.
+    pub fn f(&self) -> &[DVec2] {
+        &self.f
+    }
+    /// Masses, kg.
+    pub fn mass(&self) -> &[f64] {
+        &self.mass
+    }
+    /// 1/m, and 0 for a pinned or kinematic particle.
+    pub fn inv_mass(&self) -> &[f64] {
+        &self.inv_mass
+    }
+    /// Each particle's external force, N ; empty while
+    /// none is set.
+    pub fn external(&self) -> &[DVec2] {
+        &self.external
+    }
+    /// Whether some external force is non-zero.
+    pub fn external_active(&self) -> bool {
+        self.external_active
+    }
+    /// How many particles are held kinematic.
+    pub fn kinematic(&self) -> usize {
+        self.kinematic
+    }
+    /// The packed springs (ends as dense particle indices; `k` the stiffness in effect).
+    pub fn springs(&self) -> &[PackedSpring] {
+        &self.springs
+    }
+    /// Marks the spring graph, a stiffness, a mass or a pin as changed.
+    pub(crate) fn touch(&mut self) {
+        self.revision = self.revision.wrapping_add(1);
+    }
+}
+
+impl State {
+    /// Particles in the packed state.
+    pub fn particle_count(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Springs in the packed state.
+    pub fn spring_count(&self) -> usize {
+        self.springs.len()
+    }
+
+    /// Whether forces leave particle `i` in place (pinned or kinematic).
+    pub fn is_pinned(&self, i: usize) -> bool {
+        self.inv_mass[i] == 0.0
+    }
+
+    /// Applies (or clears) a global stiffness override to every spring.
+    pub fn apply_stiffness_override(&mut self, k: Option<f64>) {
+        match k {
+            Some(k) => {
+                if self.own_stiffness.len() != self.springs.len() {
+                    self.own_stiffness = self.springs.iter().map(|s| s.k).collect();
+                }
+                self.springs.iter_mut().for_each(|s| s.k = k);
+            }
+            None => {
+                let own = std::mem::take(&mut self.own_stiffness);
+                for (s, own) in self.springs.iter_mut().zip(own) {
+                    s.k = own;
+                }
+            }
+        }
+        self.applied_override = k;
+        self.touch();
+    }
+
+    /// Sets packed spring `i`'s own stiffness: in effect now, or restored when the override
+    /// is cleared.
+    pub(crate) fn set_own_stiffness(&mut self, i: usize, k: f64) {
+        match self.own_stiffness.get_mut(i) {
+            Some(own) => *own = k,
+            None => self.springs[i].k = k,
+        }
+    }
+
+    /// Sets particle `i`'s external force, storing the array when the first one is set.
+    pub(crate) fn set_external(&mut self, i: usize, f: DVec2) {
+        if self.external.is_empty() {
+            if f == DVec2::ZERO {
+                return;
+            }
+            self.external = vec![DVec2::ZERO; self.x.len()];
+        }
+        self.external[i] = f;
+    }
+
+    /// Recomputes whether some external force is set, dropping the array when none is.
+    pub(crate) fn refresh_external(&mut self) {
+        let active = self.external.iter().any(|f| *f != DVec2::ZERO);
+        if !active && !self.external.is_empty() {
+            self.external = vec![];
+        }
+        if self.external_active != active {
+            self.external_active = active;
+        }
+    }
+
+    /// The drift buffer, sized to the particles (allocated on first use).
+    pub(crate) fn drift_buffer(&mut self) -> &mut Vec<DVec2> {
+        if self.drift.len() != self.x.len() {
+            self.drift = vec![DVec2::ZERO; self.x.len()];
+        }
+        &mut self.drift
+    }
+
+    /// Total mechanical energy: Σ ½m|v|² − Σ m g·x + Σ ½k(|xa−xb|−L)².
+    pub fn energy(&self, gravity: DVec2) -> Energy {
+        let mut kinetic = 0.0;
+        let mut potential_gravity = 0.0;
+        for ((x, v), m) in self.x.iter().zip(&self.v).zip(&self.mass) {
+            kinetic += 0.5 * m * v.length_squared();
+            potential_gravity -= m * gravity.dot(*x);
+        }
+        let mut potential_springs = 0.0;
+        for s in &self.springs {
+            let stretch = (self.x[s.a as usize] - self.x[s.b as usize]).length() - s.rest;
+            potential_springs += 0.5 * s.k * stretch * stretch;
+        }
+        Energy {
+            kinetic,
+            potential_gravity,
+            potential_springs,
+        }
+    }
+
+    /// True when every position and velocity is finite.
+    pub fn state_is_finite(&self) -> bool {
+        self.x.iter().chain(&self.v).all(|p| p.is_finite())
+    }
+}
+
+/// Mechanical energy in joules, by kind.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Energy {
+    /// Σ ½ m |v|², J.
+    pub kinetic: f64,
+    /// −Σ m g·x, J.
+    pub potential_gravity: f64,
+    /// Σ ½ k (|x_a − x_b| − L)², J.
+    pub potential_springs: f64,
+}
+
+impl Energy {
+    /// The sum of the three.
+    pub fn total(&self) -> f64 {
+        self.kinetic + self.potential_gravity + self.potential_springs
+    }
+}

@@ -1,0 +1,269 @@
+//! One step of size dt, pass by pass: the step's semantics in one place.
+//!
+//! A step runs these passes in order (the Bevy layer runs each as a system in its public set,
+//! [`crate::sim::StepSystems`], so that users can order their own systems between them):
+//!
+//! 1. **Forces** ([`forces`]): f = m g + f_ext + Σ springs at the start-of-step positions, each
+//!    spring evaluated once and scattered to its two ends. Methods that work on positions
+//!    (projective dynamics, XPBD) take only the body forces m g + f_ext.
+//! 2. **Integrate**: the integrator's velocity update, and for the multi-stage methods the
+//!    drift velocity u the position update moves with ([`super::integrators`]'s table;
+//!    [`kick`] for the Euler methods, [`super::projective`], [`super::xpbd`]).
+//! 3. **Damping** ([`damp`]): v *= exp(−μ dt), when μ ≠ 0.
+//! 4. **Ground** ([`ground`]): a free particle below the ground is put on it and its vertical
+//!    velocity zeroed, on the start-of-step position, when the scene has a ground.
+//! 5. **Advance** ([`advance`]): x += dt u (u = v for symplectic and implicit Euler and
+//!    projective dynamics, the start-of-step v for explicit Euler, the drift for the others),
+//!    and a check that everything stayed finite.
+//!
+//! Passes 2 (the Euler kick) to 5 can also run as one sweep over the particles ([`sweep`]),
+//! assembled from the passes in use, bit for bit the same result.
+//!
+//! Every function here takes the packed [`State`], the per-method buffers ([`Workspace`]) and
+//! the thread pool ([`Threads`]); none knows who owns the particles.
+
+use super::integrators::{self, CgSettings, Scratch};
+use super::kernels::{self, Motion, Sweep};
+use super::method::{Integrator, Iterations};
+use super::parallel::{self, Threads};
+use super::projective::{self, Projective};
+use super::state::State;
+use super::xpbd::{self, Xpbd};
+use glam::DVec2;
+
+/// What the methods keep from step to step besides the state: the multi-stage and implicit
+/// methods' buffers and the pair passes' thread split, projective dynamics' factor, XPBD's
+/// colouring, and their counters.
+#[derive(Debug, Default)]
+pub struct Workspace {
+    pub(crate) scratch: Scratch,
+    pub(crate) projective: Projective,
+    pub(crate) xpbd: Xpbd,
+}
+
+impl Workspace {
+    /// A workspace for a repacked state: new buffers (their sizes and thread split follow the
+    /// new arrays), while the large-step methods' precomputation and every counter carry on
+    /// (the state's new revision makes them redo the precomputation).
+    pub(crate) fn repacked(&mut self) -> Workspace {
+        Workspace {
+            scratch: self.scratch.repacked(),
+            projective: std::mem::take(&mut self.projective),
+            xpbd: std::mem::take(&mut self.xpbd),
+        }
+    }
+
+    /// What the iterative methods did so far: iterations per step, factorisations and their
+    /// time, colours.
+    pub fn solve_stats(&self) -> SolveStats {
+        let (sc, pd) = (&self.scratch, &self.projective);
+        SolveStats {
+            newton_iterations_per_step: sc.newton_iterations_per_step(),
+            cg_iterations_per_step: sc.cg_iterations_per_step(),
+            projective_iterations_per_step: pd.iterations_per_step(),
+            factorizations: pd.factorizations,
+            factorization_seconds: pd.factor_seconds,
+            factor_nonzeros: pd.factor_nonzeros(),
+            xpbd_sweeps_per_step: self.xpbd.sweeps_per_step(),
+            xpbd_colours: self.xpbd.colours(),
+        }
+    }
+}
+
+/// The iterative methods' work so far (see [`Workspace::solve_stats`]); a figure is `None` (or
+/// 0) when its method has not run.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct SolveStats {
+    /// Implicit Euler: Newton steps per time step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub newton_iterations_per_step: Option<f64>,
+    /// Implicit Euler: conjugate-gradient iterations per time step, all Newton steps together.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cg_iterations_per_step: Option<f64>,
+    /// Projective dynamics: local/global iterations per time step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub projective_iterations_per_step: Option<f64>,
+    /// Projective dynamics: factorisations of M + h²L.
+    pub factorizations: u64,
+    /// Projective dynamics: their wall time, s.
+    pub factorization_seconds: f64,
+    /// Projective dynamics: nonzeros of the last Cholesky factor.
+    pub factor_nonzeros: usize,
+    /// XPBD: constraint sweeps per time step (substeps × sweeps).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub xpbd_sweeps_per_step: Option<f64>,
+    /// XPBD: colours of the constraint graph (sweeps run colour by colour).
+    pub xpbd_colours: usize,
+}
+
+/// Pass 1, the body forces alone: f = m g + f_ext (what the position-based methods read).
+pub fn body_forces(s: &mut State, gravity: DVec2, threads: &Threads) {
+    let external = s.external_active.then_some(&s.external[..]);
+    integrators::body_forces(
+        threads,
+        s.springs.len(),
+        &mut s.f,
+        &s.mass,
+        external,
+        gravity,
+    );
+}
+
+/// Pass 1, after [`body_forces`]: f += Σ spring forces at the start-of-step positions.
+pub fn spring_forces(s: &mut State, w: &mut Workspace, threads: &Threads) {
+    let buffers = &mut w.scratch.pairs;
+    parallel::accumulate_spring_forces(threads, buffers, &mut s.f, &s.x, &s.springs);
+}
+
+/// Pass 1 whole: the body forces, then the springs when the method reads them.
+pub fn forces(
+    s: &mut State,
+    w: &mut Workspace,
+    integrator: Integrator,
+    gravity: DVec2,
+    threads: &Threads,
+) {
+    body_forces(s, gravity, threads);
+    if integrator.reads_spring_forces() && !s.springs.is_empty() {
+        spring_forces(s, w, threads);
+    }
+}
+
+/// Pass 2 for the Euler methods: v += dt f/m; explicit Euler first keeps the start-of-step
+/// velocity as the drift.
+pub fn kick(s: &mut State, integrator: Integrator, dt: f64, threads: &Threads) {
+    if integrator == Integrator::ExplicitEuler {
+        s.drift_buffer();
+        s.drift.copy_from_slice(&s.v);
+    }
+    let data = (&mut s.v[..], &s.f[..], &s.inv_mass[..]);
+    threads.each(s.springs.len(), data, |(v, f, w)| {
+        kernels::kick(v, f, w, dt)
+    });
+}
+
+/// What one step needs to know of the method: the integrator, dt, gravity, the ground (XPBD
+/// resolves contact inside its substeps), the iteration counts and the CG settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Method {
+    /// The integrator.
+    pub integrator: Integrator,
+    /// The step, s.
+    pub dt: f64,
+    /// Gravitational acceleration, m/s².
+    pub gravity: DVec2,
+    /// The ground's height, when the scene has one.
+    pub ground: Option<f64>,
+    /// The iterative methods' counts.
+    pub iterations: Iterations,
+    /// Implicit Euler's solve.
+    pub cg: CgSettings,
+}
+
+/// Pass 2: the integrator's update (the Euler methods' [`kick`], or the method's solve).
+/// Fails only when projective dynamics cannot factor its matrix (memory ran out).
+pub fn integrate(
+    s: &mut State,
+    w: &mut Workspace,
+    m: &Method,
+    threads: &Threads,
+) -> Result<(), String> {
+    let (dt, g, it) = (m.dt, m.gravity, m.iterations);
+    match m.integrator {
+        Integrator::ExplicitEuler | Integrator::SymplecticEuler => {
+            kick(s, m.integrator, dt, threads)
+        }
+        Integrator::VelocityVerlet => {
+            integrators::velocity_verlet(s, &mut w.scratch, dt, g, threads)
+        }
+        Integrator::Rk4 => integrators::rk4(s, &mut w.scratch, dt, g, threads),
+        Integrator::ImplicitEuler => {
+            integrators::implicit_euler(s, &mut w.scratch, dt, m.cg, it.newton, g, threads)
+        }
+        Integrator::ProjectiveDynamics => {
+            projective::step(s, &mut w.projective, dt, it.projective, threads)?
+        }
+        Integrator::Xpbd => {
+            let (n, sweeps) = (it.xpbd_substeps, it.xpbd_sweeps);
+            xpbd::step(s, &mut w.xpbd, dt, n, sweeps, m.ground, threads)
+        }
+    }
+    Ok(())
+}
+
+/// Pass 3: v *= exp(−μ dt).
+pub fn damp(s: &mut State, damping: f64, dt: f64, threads: &Threads) {
+    threads.each(s.springs.len(), &mut s.v[..], |v| {
+        kernels::damp(v, damping, dt)
+    });
+}
+
+/// Pass 4: ground contact on the start-of-step position.
+pub fn ground(s: &mut State, ground: f64, threads: &Threads) {
+    let data = (&mut s.x[..], &mut s.v[..], &s.inv_mass[..]);
+    threads.each(s.springs.len(), data, |(x, v, w)| {
+        kernels::ground_contact(x, v, w, ground)
+    });
+}
+
+/// How an integrator's step ends: with the Euler kick or without, and which velocity moves the
+/// particles (the position update's drift).
+pub fn motion(integrator: Integrator) -> Motion {
+    match integrator {
+        Integrator::ExplicitEuler => Motion::ExplicitEuler,
+        Integrator::SymplecticEuler => Motion::SymplecticEuler,
+        Integrator::ImplicitEuler | Integrator::ProjectiveDynamics => Motion::EndVelocity,
+        Integrator::VelocityVerlet | Integrator::Rk4 | Integrator::Xpbd => Motion::Drift,
+    }
+}
+
+/// Pass 5: x += dt u with the integrator's drift velocity; records whether the step stayed
+/// finite.
+pub fn advance(s: &mut State, integrator: Integrator, dt: f64, threads: &Threads) {
+    let drift = match motion(integrator) {
+        Motion::ExplicitEuler | Motion::Drift => &s.drift,
+        Motion::SymplecticEuler | Motion::EndVelocity => &s.v,
+    };
+    let finite = threads.chunked(
+        s.springs.len(),
+        (&mut s.x[..], &drift[..], &s.v[..]),
+        |(x, u, v)| kernels::advance(x, u, v, dt),
+        |a, b| a & b,
+    );
+    s.non_finite = !finite;
+}
+
+/// Passes 2 (the Euler kick only: the other methods' solves run before) to 5 as one sweep over
+/// the particles, with only the parts in use: no damping work when μ = 0, no contact test
+/// without a ground ([`kernels::particle_sweep`]). Returns the sweep it ran.
+pub fn sweep(
+    s: &mut State,
+    integrator: Integrator,
+    dt: f64,
+    damping: f64,
+    ground: Option<f64>,
+    threads: &Threads,
+) -> Sweep {
+    let sweep = Sweep {
+        motion: motion(integrator),
+        decay: (damping != 0.0).then(|| (-damping * dt).exp()),
+        ground,
+    };
+    if sweep.motion == Motion::Drift {
+        s.drift_buffer();
+    }
+    let drift = match sweep.motion {
+        Motion::Drift => &s.drift[..],
+        // Not read: any array of the particles' length.
+        _ => &s.f[..],
+    };
+    let data = (&mut s.x[..], &mut s.v[..], &s.f[..], &s.inv_mass[..], drift);
+    let finite = threads.chunked(
+        s.springs.len(),
+        data,
+        |data| kernels::particle_sweep(data, dt, sweep),
+        |a, b| a & b,
+    );
+    s.non_finite = !finite;
+    sweep
+}
