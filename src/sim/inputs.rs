@@ -8,8 +8,7 @@
 
 use super::components::{Mass, Particle, Spring};
 pub use super::params::InputProblem;
-use super::params::{CgSettings, Iterations, SimParams, SimStatus};
-use super::schedule::TickPlan;
+use super::params::{CgSettings, Iterations, SimParams, SimStatus, TickPlan};
 use bevy::prelude::*;
 
 fn problem(field: &'static str, value: f64, rule: &'static str) -> InputProblem {

@@ -25,8 +25,7 @@ pub use components::*;
 pub use params::*;
 pub use profile::PassTimes;
 pub use schedule::{
-    ParticleSweep, PhysicsStep, PhysicsSystems, SimPlugin, StepBudget, StepSystems, TickPlan,
-    advance, pack,
+    ParticleSweep, PhysicsStep, PhysicsSystems, SimPlugin, StepBudget, StepSystems, advance, pack,
 };
 #[allow(deprecated)]
 pub use schedule::{PhysicsSet, StepSet};

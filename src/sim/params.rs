@@ -240,3 +240,28 @@ impl std::fmt::Display for InputProblem {
         write!(f, ": {}", self.rule)
     }
 }
+
+/// How many steps one fixed tick runs.
+///
+/// ```
+/// # use hooke::sim::TickPlan;
+/// let mut app = hooke::headless_app();
+/// // Ticks of 1/60 s of simulated time instead of 1/120 s.
+/// app.world_mut().resource_mut::<TickPlan>().target_tick_seconds = 1.0 / 60.0;
+/// ```
+#[derive(Resource, Debug, Clone, Copy, PartialEq)]
+pub struct TickPlan {
+    /// Steps each fixed tick runs.
+    pub steps_per_tick: u32,
+    /// The simulated time a tick should cover in the app; `steps_per_tick` follows from it and dt.
+    pub target_tick_seconds: f64,
+}
+
+impl Default for TickPlan {
+    fn default() -> Self {
+        TickPlan {
+            steps_per_tick: 1,
+            target_tick_seconds: 1.0 / 120.0,
+        }
+    }
+}

@@ -115,31 +115,6 @@ impl Default for ParticleSweep {
     }
 }
 
-/// How many steps one fixed tick runs.
-///
-/// ```
-/// # use hooke::sim::TickPlan;
-/// let mut app = hooke::headless_app();
-/// // Ticks of 1/60 s of simulated time instead of 1/120 s.
-/// app.world_mut().resource_mut::<TickPlan>().target_tick_seconds = 1.0 / 60.0;
-/// ```
-#[derive(Resource, Debug, Clone, Copy, PartialEq)]
-pub struct TickPlan {
-    /// Steps each fixed tick runs.
-    pub steps_per_tick: u32,
-    /// The simulated time a tick should cover in the app; `steps_per_tick` follows from it and dt.
-    pub target_tick_seconds: f64,
-}
-
-impl Default for TickPlan {
-    fn default() -> Self {
-        TickPlan {
-            steps_per_tick: 1,
-            target_tick_seconds: 1.0 / 120.0,
-        }
-    }
-}
-
 /// The wall-clock time fixed ticks may take in one frame. Past it the remaining simulated time
 /// of the frame is dropped: the simulation slows down instead of the window freezing.
 ///
@@ -274,9 +249,10 @@ impl Plugin for SimPlugin {
                 )
                 .add_systems((
                     (
-                        apply_gravity,
-                        accumulate_spring_forces
-                            .run_if(scene_has_springs.and_then(integrator_reads_spring_forces)),
+                        // Body and spring forces in one parallel region, or the body forces
+                        // alone when no spring force is read.
+                        forces.run_if(spring_forces_read),
+                        apply_gravity.run_if(not(spring_forces_read)),
                     )
                         .chain()
                         .in_set(StepSystems::Forces),
@@ -311,6 +287,12 @@ pub fn simulation_running(params: Res<SimParams>, status: Res<SimStatus>) -> boo
 /// Run condition: the scene has springs.
 pub fn scene_has_springs(solver: Res<Solver>) -> bool {
     !solver.springs.is_empty()
+}
+
+/// Run condition: the scene has springs and the integrator reads their forces at the start of
+/// the step.
+pub fn spring_forces_read(params: Res<SimParams>, solver: Res<Solver>) -> bool {
+    params.integrator.reads_spring_forces() && !solver.springs.is_empty()
 }
 
 /// Run condition: the integrator reads the spring forces at the start of the step (projective
@@ -359,13 +341,15 @@ fn apply_gravity(
     n.gravity += 1;
 }
 
-fn accumulate_spring_forces(
+fn forces(
     mut solver: ResMut<Solver>,
+    params: Res<SimParams>,
     threads: Res<SolverThreads>,
     mut n: ResMut<PassCounts>,
 ) {
     let s = &mut *solver;
-    step::spring_forces(&mut s.state, &mut s.work, &threads);
+    step::forces(&mut s.state, &mut s.work, params.gravity, &threads);
+    n.gravity += 1;
     n.springs += 1;
 }
 

@@ -232,7 +232,7 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &Springs) {
     }
     // Grouped by first end, then second (ties by entity): the spring pass then sums each
     // particle's run of springs in a register, and repeated second ends lie a few springs
-    // apart, so no update waits on the previous one's store (see `kernels::scatter_pairs`).
+    // apart, so no update waits on the previous one's store (see `solver::spring::Run`).
     sort_springs(&mut packed, &mut spring_entities);
 
     let state = State {

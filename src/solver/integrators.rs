@@ -99,14 +99,32 @@ pub fn body_forces(
     }
 }
 
-/// f(x) = m g + f_ext + Σ spring forces.
-///
-/// A stage's evaluation: at the positions in `scratch.x`, into `scratch.f`.
+/// f = m g + f_ext + Σ spring forces at positions `x`, in one parallel region: each thread
+/// starts its own particles with their body forces, then adds its springs' (bit for bit
+/// [`body_forces`] then the spring pass). Every force evaluation with springs runs it: the
+/// step's force pass and every stage.
+pub fn forces_at(
+    s: &State,
+    pairs: &mut SpringBuffers,
+    f: &mut [DVec2],
+    x: &[DVec2],
+    g: DVec2,
+    threads: &Threads,
+) {
+    let (mass, external) = (&s.mass[..], s.external_active.then_some(&s.external[..]));
+    let init = |start: usize, f: &mut [DVec2]| {
+        let m = &mass[start..start + f.len()];
+        match external {
+            None => apply_gravity(f, m, g),
+            Some(e) => apply_gravity_and_external(f, m, &e[start..start + f.len()], g),
+        }
+    };
+    super::parallel::spring_forces_from(threads, pairs, f, x, &s.springs, &init);
+}
+
+/// A stage's evaluation: f(x) at the positions in `scratch.x`, into `scratch.f`.
 fn stage_forces(s: &State, sc: &mut Scratch, g: DVec2, threads: &Threads) {
-    let external = s.external_active.then_some(&s.external[..]);
-    let (f, x) = (&mut sc.f, &sc.x);
-    body_forces(threads, s.springs.len(), f, &s.mass, external, g);
-    super::parallel::accumulate_spring_forces(threads, &mut sc.pairs, f, x, &s.springs);
+    forces_at(s, &mut sc.pairs, &mut sc.f, &sc.x, g, threads);
 }
 
 /// Velocity Verlet, kick-drift-kick, with a second force evaluation at x0 + dt v½.

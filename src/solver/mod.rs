@@ -20,6 +20,7 @@ pub(crate) mod kernels;
 pub mod method;
 pub(crate) mod parallel;
 pub(crate) mod projective;
+pub(crate) mod spring;
 pub mod stability;
 pub mod state;
 pub mod step;

@@ -371,7 +371,9 @@ impl PairPass for SpringForces<'_> {
     }
 }
 
-/// f += Σ spring forces, each spring evaluated once, on the pool's threads when worthwhile.
+/// f += Σ spring forces, each spring evaluated once, on the pool's threads when worthwhile
+/// (the tests' reference for [`spring_forces_from`]).
+#[cfg(test)]
 pub fn accumulate_spring_forces(
     threads: &Threads,
     buffers: &mut SpringBuffers,
@@ -380,6 +382,21 @@ pub fn accumulate_spring_forces(
     springs: &[PackedSpring],
 ) {
     scatter(threads, buffers, f, springs, &SpringForces(x));
+}
+
+/// f = init + Σ spring forces: `init(start, slice)` writes each particle's starting value (the
+/// body forces) into `slice`, the particles from `start` on. On threads each part starts its
+/// own particles inside the same parallel region as its springs, so the forces take one
+/// region a step, not two.
+pub fn spring_forces_from(
+    threads: &Threads,
+    buffers: &mut SpringBuffers,
+    f: &mut [DVec2],
+    x: &[DVec2],
+    springs: &[PackedSpring],
+    init: &(impl Fn(usize, &mut [DVec2]) + Sync),
+) {
+    scatter_from(threads, buffers, f, springs, &SpringForces(x), init);
 }
 
 /// out += every contribution of `pass` over `pairs`, on the pool's threads when worthwhile.
@@ -399,7 +416,42 @@ pub fn scatter<P: PairPass>(
     pairs: &[P::Pair],
     pass: &P,
 ) {
+    scatter_parts(
+        threads,
+        buffers,
+        out,
+        pairs,
+        pass,
+        None::<&fn(usize, &mut [DVec2])>,
+    );
+}
+
+/// [`scatter`] into `out` = init + Σ contributions (see [`spring_forces_from`]).
+pub fn scatter_from<P: PairPass>(
+    threads: &Threads,
+    buffers: &mut SpringBuffers,
+    out: &mut [DVec2],
+    pairs: &[P::Pair],
+    pass: &P,
+    init: &(impl Fn(usize, &mut [DVec2]) + Sync),
+) {
+    scatter_parts(threads, buffers, out, pairs, pass, Some(init));
+}
+
+/// [`scatter`], and with `init`, each part first starts its own particles, and the particles
+/// of no part are started after the region, before the recorded contributions are added.
+fn scatter_parts<P: PairPass, I: Fn(usize, &mut [DVec2]) + Sync>(
+    threads: &Threads,
+    buffers: &mut SpringBuffers,
+    out: &mut [DVec2],
+    pairs: &[P::Pair],
+    pass: &P,
+    init: Option<&I>,
+) {
     let Some(pool) = threads.pool_for(pairs.len()) else {
+        if let Some(init) = init {
+            init(0, out);
+        }
         pass.run(pairs, |i, v| out[i] += v);
         return;
     };
@@ -427,6 +479,9 @@ pub fn scatter<P: PairPass>(
             let boundary = &mut boundary.0;
             boundary.clear();
             let base = part.exclusive.start;
+            if let Some(init) = init {
+                init(base, out);
+            }
             for seg in &part.segments {
                 let pairs = &pairs[seg.springs.clone()];
                 if seg.inner {
@@ -442,6 +497,19 @@ pub fn scatter<P: PairPass>(
             }
         });
     });
+    if let Some(init) = init {
+        // The particles between the parts' own ranges.
+        let mut owned: Vec<Range<usize>> =
+            layout.parts.iter().map(|p| p.exclusive.clone()).collect();
+        owned.sort_by_key(|r| r.start);
+        let mut at = 0;
+        for r in owned.iter().chain(std::iter::once(&(out.len()..out.len()))) {
+            if r.start > at {
+                init(at, &mut out[at..r.start]);
+            }
+            at = at.max(r.end);
+        }
+    }
     for boundary in &buffers.boundary {
         for &(i, v) in &boundary.0 {
             out[i as usize] += v;
@@ -625,6 +693,34 @@ mod tests {
                 (*a - *b).abs().max_element() <= 1e-12 * scale,
                 "{what}, particle {i}: {a} vs {b}"
             );
+        }
+    }
+
+    /// Forces started from body forces inside the region equal the body forces plus the
+    /// threaded accumulation, bit for bit: every particle is started once, in or between the
+    /// parts.
+    #[test]
+    fn forces_started_in_the_region_equal_body_forces_plus_springs() {
+        for (n, springs) in [(160 * 160, grid(160, 160)), (5000, tangle(5000, 30_000))] {
+            let x = positions(n);
+            let body = |i: usize| DVec2::new(i as f64 * 1e-3, -9.8);
+            for count in [1, 2, 3] {
+                let threads = Threads::new(count).unwrap();
+                let (mut b1, mut b2) = (SpringBuffers::default(), SpringBuffers::default());
+                let mut apart: Vec<DVec2> = (0..n as usize).map(body).collect();
+                accumulate_spring_forces(&threads, &mut b1, &mut apart, &x, &springs);
+                let mut together = vec![DVec2::splat(f64::NAN); n as usize];
+                let init = |start: usize, f: &mut [DVec2]| {
+                    for (k, f) in f.iter_mut().enumerate() {
+                        *f = body(start + k);
+                    }
+                };
+                spring_forces_from(&threads, &mut b2, &mut together, &x, &springs, &init);
+                let bits = |v: &[DVec2]| -> Vec<[u64; 2]> {
+                    v.iter().map(|p| [p.x.to_bits(), p.y.to_bits()]).collect()
+                };
+                assert!(bits(&apart) == bits(&together), "{count} threads");
+            }
         }
     }
 

@@ -5,7 +5,7 @@
 //!
 //! 1. **Forces** ([`forces`]): f = m g + f_ext + Σ springs at the start-of-step positions, each
 //!    spring evaluated once and scattered to its two ends. Methods that work on positions
-//!    (projective dynamics, XPBD) take only the body forces m g + f_ext.
+//!    (projective dynamics, XPBD) take only the body forces m g + f_ext ([`body_forces`]).
 //! 2. **Integrate**: the integrator's velocity update, and for the multi-stage methods the
 //!    drift velocity u the position update moves with ([`super::integrators`]'s table;
 //!    [`kick`] for the Euler methods, [`super::projective`], [`super::xpbd`]).
@@ -25,7 +25,7 @@
 use super::integrators::{self, CgSettings, Scratch};
 use super::kernels::{self, Motion, Sweep};
 use super::method::{Integrator, Iterations};
-use super::parallel::{self, Threads};
+use super::parallel::Threads;
 use super::projective::{self, Projective};
 use super::state::State;
 use super::xpbd::{self, Xpbd};
@@ -109,24 +109,12 @@ pub fn body_forces(s: &mut State, gravity: DVec2, threads: &Threads) {
     );
 }
 
-/// Pass 1, after [`body_forces`]: f += Σ spring forces at the start-of-step positions.
-pub fn spring_forces(s: &mut State, w: &mut Workspace, threads: &Threads) {
-    let buffers = &mut w.scratch.pairs;
-    parallel::accumulate_spring_forces(threads, buffers, &mut s.f, &s.x, &s.springs);
-}
-
-/// Pass 1 whole: the body forces, then the springs when the method reads them.
-pub fn forces(
-    s: &mut State,
-    w: &mut Workspace,
-    integrator: Integrator,
-    gravity: DVec2,
-    threads: &Threads,
-) {
-    body_forces(s, gravity, threads);
-    if integrator.reads_spring_forces() && !s.springs.is_empty() {
-        spring_forces(s, w, threads);
-    }
+/// Pass 1, in one parallel region: f = m g + f_ext + Σ spring forces at the start-of-step
+/// positions ([`integrators::forces_at`]).
+pub fn forces(s: &mut State, w: &mut Workspace, gravity: DVec2, threads: &Threads) {
+    let mut f = std::mem::take(&mut s.f);
+    integrators::forces_at(s, &mut w.scratch.pairs, &mut f, &s.x, gravity, threads);
+    s.f = f;
 }
 
 /// Pass 2 for the Euler methods: v += dt f/m; explicit Euler first keeps the start-of-step

@@ -5,10 +5,10 @@
 //! the (a, a) and (b, b) positions and its negative to (a, b) and (b, a), with d̂ the unit
 //! direction a − b and α = 1 − L/l the transverse coefficient, clamped at 0 for compressed
 //! springs so that K stays positive semi-definite. Springs shorter than
-//! [`super::kernels::MIN_SPRING_LENGTH`] contribute nothing.
+//! [`super::spring::MIN_SPRING_LENGTH`] contribute nothing.
 
-use super::kernels::{self, MIN_SPRING_LENGTH};
 use super::parallel::{self, Pair, PairPass, SpringBuffers, Threads};
+use super::spring::{self, MIN_SPRING_LENGTH};
 use super::state::PackedSpring;
 use glam::DVec2;
 
@@ -123,7 +123,7 @@ impl PairPass for KTimes<'_> {
     #[inline(always)]
     fn run(&self, blocks: &[Block], mut add: impl FnMut(usize, DVec2)) {
         let u = self.0;
-        let mut run = kernels::Run::new(blocks.first().map(|b| b.a));
+        let mut run = spring::Run::new(blocks.first().map(|b| b.a));
         for block in blocks {
             let g = block.m.times(u[block.a as usize] - u[block.b as usize]);
             run.push((block.a, block.b), Some(g), &mut add);
@@ -147,6 +147,6 @@ pub fn apply_threaded(
     u: &[DVec2],
     blocks: &[Block],
 ) {
-    threads.each(blocks.len(), &mut *out, |out| out.fill(DVec2::ZERO));
-    parallel::scatter(threads, buffers, out, blocks, &KTimes(u));
+    let zero = |_: usize, out: &mut [DVec2]| out.fill(DVec2::ZERO);
+    parallel::scatter_from(threads, buffers, out, blocks, &KTimes(u), &zero);
 }

@@ -3,13 +3,13 @@
 //! Per spring the pass needs a square root and a division, and their latency, not memory, is
 //! what bounds the scalar loop (measured with `perf annotate`: the loop waits on `divsd`). One
 //! `vsqrtpd` and one `vdivpd` serve four springs, and two such quads are in flight at once.
-//! The operations are the scalar kernel's, in the same order ([`super::kernels::spring_force`]:
+//! The operations are the scalar kernel's, in the same order ([`super::spring::spring_force`]:
 //! d = x_a − x_b, l = √(d·d), d · (−k (l − L) / l)), and IEEE square root and division are
 //! correctly rounded, so the forces are bit for bit the scalar ones. The gather of positions and the scatter of forces stay scalar.
 
 #![cfg(target_arch = "x86_64")]
 
-use super::kernels::{MIN_SPRING_LENGTH, Run, spring_force};
+use super::spring::{MIN_SPRING_LENGTH, Run, spring_force};
 use super::state::PackedSpring;
 use glam::DVec2;
 use std::arch::x86_64::*;
@@ -114,7 +114,7 @@ unsafe fn four_forces(x: &[DVec2], s: &[PackedSpring], out: &mut [f64; 8]) -> i3
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solver::kernels::scatter_pairs;
+    use crate::solver::spring::scatter_pairs;
 
     /// Forces from the AVX pass and the scalar pass, for springs of every kind: runs sharing an
     /// end, a zero-length spring, one with a NaN end, and a tail that is not a whole quad.

@@ -1,0 +1,83 @@
+//! One spring's force, and the scatter's running sum: what the scalar and the AVX spring
+//! passes ([`super::kernels::for_each_spring_force`], [`super::wide`]) and the stiffness
+//! product ([`super::stiffness`]) share.
+
+use super::state::PackedSpring;
+use glam::DVec2;
+
+/// Springs shorter than this exert no force: their direction is undefined.
+pub const MIN_SPRING_LENGTH: f64 = 1e-12;
+
+/// The force on a spring's end a, -k (l - L) d / l with d = x_a - x_b and l = |d| (end b gets
+/// its negative); `None` for a spring of (near) zero length, whose direction is undefined.
+/// A non-finite length still yields a (non-finite) force, so that a blow-up is seen.
+#[inline]
+pub fn spring_force(s: &PackedSpring, x: &[DVec2]) -> Option<DVec2> {
+    let d = x[s.a as usize] - x[s.b as usize];
+    let l = d.length();
+    if l < MIN_SPRING_LENGTH {
+        return None;
+    }
+    Some(d * (-s.k * (l - s.rest) / l))
+}
+
+/// For each spring, `add(a, g)` and `add(b, -g)` with `g = force(spring)` (nothing for `None`),
+/// one spring at a time: the scalar spring pass.
+#[inline(always)]
+pub fn scatter_pairs(
+    springs: &[PackedSpring],
+    mut force: impl FnMut(&PackedSpring) -> Option<DVec2>,
+    mut add: impl FnMut(usize, DVec2),
+) {
+    let mut run = Run::new(springs.first().map(|s| s.a));
+    for s in springs {
+        run.push((s.a, s.b), force(s), &mut add);
+    }
+    run.finish(add);
+}
+
+/// The scatter's running sum on a pair's end a (spring forces, and K times a vector in
+/// [`super::stiffness::apply`]).
+///
+/// Consecutive springs that share their end a (the packed springs are sorted by it, see
+/// the Bevy layer's sync) sum their contributions to a in a register and hand them over once. Adding
+/// each to memory, spring after spring, makes every update wait for the previous one's store.
+pub struct Run {
+    a: usize,
+    on_a: DVec2,
+}
+
+impl Run {
+    #[inline(always)]
+    pub fn new(first_a: Option<u32>) -> Run {
+        Run {
+            a: first_a.map_or(0, |a| a as usize),
+            on_a: DVec2::ZERO,
+        }
+    }
+
+    /// Scatters a pair's contribution `g` on a (and −g on b).
+    #[inline(always)]
+    pub fn push(
+        &mut self,
+        (a, b): (u32, u32),
+        g: Option<DVec2>,
+        add: &mut impl FnMut(usize, DVec2),
+    ) {
+        if a as usize != self.a {
+            add(self.a, self.on_a);
+            (self.a, self.on_a) = (a as usize, DVec2::ZERO);
+        }
+        if let Some(g) = g {
+            self.on_a += g;
+            add(b as usize, -g);
+        }
+    }
+
+    #[inline(always)]
+    pub fn finish(self, mut add: impl FnMut(usize, DVec2)) {
+        if self.on_a != DVec2::ZERO {
+            add(self.a, self.on_a);
+        }
+    }
+}
