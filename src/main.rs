@@ -96,6 +96,10 @@ enum BenchCommand {
         /// Runs per figure (the median is reported; thread counts alternate between runs).
         #[arg(long, default_value_t = 3)]
         repeat: usize,
+        /// Measure one cloth of this width in this process and print its row as JSON (what
+        /// the report runs each cloth in a process of its own with).
+        #[arg(long, hide = true)]
+        one: Option<usize>,
     },
     /// Every method at real-time steps (dt = 1/30 to 1/960 s) on four scenes: error against a
     /// fine RK4 reference, wall time per simulated second, iterations, and the static sag
@@ -205,7 +209,8 @@ fn main() -> ExitCode {
             threads,
             steps,
             repeat,
-        })) => scale(&out, widths, threads, steps, repeat),
+            one,
+        })) => scale(&out, widths, threads, steps, repeat, one),
     }
 }
 
@@ -396,7 +401,7 @@ fn perf(out: &std::path::Path, threads: Vec<usize>, budget: f64, repeat: usize) 
         "hooke bench perf{} --budget {budget:e} --repeat {repeat}",
         list_flag("--threads", &threads)
     );
-    let md = perf::markdown(&rows, &loads, &bounds, &command);
+    let md = perf::markdown(&rows, &loads, &bounds, &hooke::bench::machine(), &command);
     write_report(out, &[("perf.csv", &perf::csv(&rows)), ("perf.md", &md)])
 }
 
@@ -406,6 +411,7 @@ fn scale(
     threads: Vec<usize>,
     steps: u64,
     repeat: usize,
+    one: Option<usize>,
 ) -> ExitCode {
     use hooke::bench::scale;
     let command = format!(
@@ -426,9 +432,26 @@ fn scale(
     if steps == 0 || repeat == 0 {
         return fail("--steps and --repeat must be at least 1");
     }
+    if let Some(w) = one {
+        return match scale::run(&[w], &threads, steps, repeat, |p| eprintln!("    {p}")) {
+            Ok(rows) => match serde_json::to_string(&rows[0]) {
+                Ok(json) => {
+                    println!("{json}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(e.to_string()),
+            },
+            Err(e) => fail(e),
+        };
+    }
     let machine = hooke::bench::machine();
     eprintln!("hooke bench scale on {machine}");
-    let rows = match scale::run(&widths, &threads, steps, repeat, |w| eprintln!("  {w}")) {
+    let exe = match std::env::current_exe() {
+        Ok(e) => e,
+        Err(e) => return fail(format!("cannot find this program to run each cloth: {e}")),
+    };
+    let progress = |w: &str| eprintln!("  {w}");
+    let rows = match scale::run_isolated(&exe, &widths, &threads, steps, repeat, progress) {
         Ok(r) => r,
         Err(e) => return fail(e),
     };

@@ -209,12 +209,19 @@ pub fn csv(rows: &[Row]) -> String {
     s
 }
 
-/// The report as markdown: the figures, the load times and the bandwidth bounds, with the command that made it.
-pub fn markdown(rows: &[Row], loads: &[LoadTime], bounds: &[Bound], command: &str) -> String {
+/// The report as markdown: the figures, the load times and the bandwidth bounds, with the
+/// machine and the command that made it.
+pub fn markdown(
+    rows: &[Row],
+    loads: &[LoadTime],
+    bounds: &[Bound],
+    machine: &str,
+    command: &str,
+) -> String {
     let mut s = String::from("# Performance\n\n");
     let _ = writeln!(
         s,
-        "Made by `{command}`. Million spring updates per second (springs × steps / wall time) \
+        "Made by `{command}` on {machine}. Million spring updates per second (springs × steps / wall time) \
          for the full step schedule on cloths with damping and ground on; f64. A multi-stage \
          method updates each spring several times a step (Verlet 2, RK4 4, implicit Euler 1 \
          plus its CG products), and is counted once per step here. Each figure is the median \

@@ -16,7 +16,7 @@ use std::time::Instant;
 pub const WIDTHS: [usize; 5] = [500, 707, 1000, 1414, 2000];
 
 /// One cloth's load and step figures.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Row {
     /// Particles per side.
     pub width: usize,
@@ -159,6 +159,44 @@ pub fn run(
     Ok(rows)
 }
 
+/// [`run`] with each cloth in a process of its own (`exe bench scale --one W ...`, which prints
+/// its row as JSON): a process that loaded a smaller cloth first keeps some of its freed memory
+/// resident, and the next cloth's allocations reuse it without raising the resident size, which
+/// would understate their peak.
+pub fn run_isolated(
+    exe: &std::path::Path,
+    widths: &[usize],
+    threads: &[usize],
+    steps: u64,
+    repeat: usize,
+    mut progress: impl FnMut(&str),
+) -> Result<Vec<Row>, String> {
+    let list: Vec<String> = threads.iter().map(|t| t.to_string()).collect();
+    let mut rows = vec![];
+    for &w in widths {
+        progress(&format!("cloth{w}: in a process of its own"));
+        let out = std::process::Command::new(exe)
+            .args(["bench", "scale", "--one", &w.to_string()])
+            .args(["--threads", &list.join(",")])
+            .args([
+                "--steps",
+                &steps.to_string(),
+                "--repeat",
+                &repeat.to_string(),
+            ])
+            .stderr(std::process::Stdio::inherit())
+            .output()
+            .map_err(|e| format!("cannot run {}: {e}", exe.display()))?;
+        let text = String::from_utf8_lossy(&out.stdout);
+        let line = text.lines().rev().find(|l| l.starts_with('{'));
+        let row = line
+            .filter(|_| out.status.success())
+            .ok_or_else(|| format!("cloth{w}: the measuring process failed ({})", out.status))?;
+        rows.push(serde_json::from_str(row).map_err(|e| format!("cloth{w}: {e}"))?);
+    }
+    Ok(rows)
+}
+
 /// The report as markdown, with the machine and the command that made it.
 pub fn markdown(rows: &[Row], machine: &str, command: &str) -> String {
     let mut s = String::from("# Scale: loading and stepping millions of springs\n\n");
@@ -170,7 +208,7 @@ pub fn markdown(rows: &[Row], machine: &str, command: &str) -> String {
          them into the solver. Memory is resident memory (`/proc/self/status`) per spring: \
          what the spawn added (the entities), what the pack added (the solver's arrays), and \
          the peak of the load and the steps together (`VmHWM` after resetting it), particles' \
-         share included. Kernel time is the load's time in the kernel, mostly page faults: the \
+         share included; each cloth is measured in a process of its own. Kernel time is the load's time in the kernel, mostly page faults: the \
          first touch of new memory, which on a VM can cost far more than the copy itself.\n"
     );
     let _ = writeln!(

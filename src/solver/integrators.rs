@@ -1,7 +1,7 @@
 //! The integrators' updates. Each computes, from the start-of-step state (x0, v0) and the
 //! start-of-step force f0 = f(x0), the end-of-step velocity v1 and the drift velocity u with
 //! which the position update moves the particle (x1 = x0 + dt u). Damping and ground contact
-//! run after, as separate passes, the same for every method.
+//! run after, the same for every method (see [`super::step`]).
 //!
 //! | method | force evaluations | v1 | u |
 //! | --- | --- | --- | --- |
@@ -13,10 +13,10 @@
 //!
 //! with a = f/m, and a = 0 for pinned and kinematic particles (inverse mass 0; a kinematic one
 //! keeps its velocity, a pinned one has none). The Euler methods' velocity update is the plain
-//! kick `v += dt f/m` ([`super::kernels::kick`]), run by the schedule.
+//! kick `v += dt f/m` ([`super::step::kick`], or inside the fused particle sweep).
 //!
 //! Every force evaluation, each stage's included, starts from [`body_forces`]: gravity plus the
-//! particles' [`super::ExternalForce`], held constant over the step. Implicit Euler sees it in f0
+//! particles' external forces, held constant over the step. Implicit Euler sees it in f0
 //! (its Jacobian has no external term: an external force is taken as independent of x).
 
 use super::kernels::{apply_gravity, apply_gravity_and_external};

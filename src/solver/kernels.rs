@@ -74,7 +74,7 @@ pub fn advance(x: &mut [DVec2], drift: &[DVec2], v: &[DVec2], dt: f64) -> bool {
     probe == DVec2::ZERO
 }
 
-/// How the particle sweep moves a particle (see [`particle_sweep`]).
+/// How the particle sweep moves a particle (see [`super::step::sweep`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Motion {
     /// Explicit Euler: the kick v += dt f/m, and the position update with the velocity from

@@ -6,9 +6,21 @@
 //! 1. **Forces** ([`forces`]): f = m g + f_ext + Σ springs at the start-of-step positions, each
 //!    spring evaluated once and scattered to its two ends. Methods that work on positions
 //!    (projective dynamics, XPBD) take only the body forces m g + f_ext ([`body_forces`]).
-//! 2. **Integrate**: the integrator's velocity update, and for the multi-stage methods the
-//!    drift velocity u the position update moves with ([`super::integrators`]'s table;
-//!    [`kick`] for the Euler methods, [`super::projective`], [`super::xpbd`]).
+//! 2. **Integrate** ([`integrate`]): the integrator's end-of-step velocity v1, and the drift
+//!    velocity u the position update moves with:
+//!
+//!    | method | force evaluations | v1 | u |
+//!    | --- | --- | --- | --- |
+//!    | explicit Euler | 1 | v0 + dt a0 ([`kick`]) | v0 |
+//!    | symplectic Euler | 1 | v0 + dt a0 ([`kick`]) | v1 (after damping and contact) |
+//!    | velocity Verlet | 2 | v½ + dt/2 a(x0 + dt v½), v½ = v0 + dt/2 a0 | v½ |
+//!    | RK4 | 4 | v0 + dt/6 (a1 + 2a2 + 2a3 + a4) | (v0 + 2 v2 + 2 v3 + v4)/6 |
+//!    | implicit Euler | 1 + CG | (M − dt² K) Δv = dt (f0 + dt K v0), Newton steps after | v1 |
+//!    | projective dynamics | body forces | (x1 − x0)/dt, x1 by local/global iterations | v1 |
+//!    | XPBD | body forces | the last substep's velocity | (x1 − x0)/dt |
+//!
+//!    with a = f/m, and a = 0 for pinned and kinematic particles (inverse mass 0). The methods'
+//!    own code is in `integrators.rs`, `projective.rs` and `xpbd.rs`.
 //! 3. **Damping** ([`damp`]): v *= exp(−μ dt), when μ ≠ 0.
 //! 4. **Ground** ([`ground`]): a free particle below the ground is put on it and its vertical
 //!    velocity zeroed, on the start-of-step position, when the scene has a ground.
@@ -110,7 +122,8 @@ pub fn body_forces(s: &mut State, gravity: DVec2, threads: &Threads) {
 }
 
 /// Pass 1, in one parallel region: f = m g + f_ext + Σ spring forces at the start-of-step
-/// positions ([`integrators::forces_at`]).
+/// positions, each thread starting its own particles with their body forces before adding its
+/// springs' (bit for bit [`body_forces`] then the spring pass).
 pub fn forces(s: &mut State, w: &mut Workspace, gravity: DVec2, threads: &Threads) {
     let mut f = std::mem::take(&mut s.f);
     integrators::forces_at(s, &mut w.scratch.pairs, &mut f, &s.x, gravity, threads);
@@ -223,7 +236,7 @@ pub fn advance(s: &mut State, integrator: Integrator, dt: f64, threads: &Threads
 
 /// Passes 2 (the Euler kick only: the other methods' solves run before) to 5 as one sweep over
 /// the particles, with only the parts in use: no damping work when μ = 0, no contact test
-/// without a ground ([`kernels::particle_sweep`]). Returns the sweep it ran.
+/// without a ground (each combination its own loop). Returns the [`Sweep`] it ran.
 pub fn sweep(
     s: &mut State,
     integrator: Integrator,
