@@ -1,21 +1,9 @@
-//! The integrators' updates. Each computes, from the start-of-step state (x0, v0) and the
-//! start-of-step force f0 = f(x0), the end-of-step velocity v1 and the drift velocity u with
-//! which the position update moves the particle (x1 = x0 + dt u). Damping and ground contact
-//! run after, the same for every method (see [`super::step`]).
+//! The explicit integrators' updates and implicit Euler's Newton steps and CG. Each computes,
+//! from the start-of-step state (x0, v0) and force f0 = f(x0), the end-of-step velocity v1 and
+//! the drift velocity u with which the position update moves the particle (x1 = x0 + dt u);
+//! the table of what each computes is in [`super::step`], with the passes around them.
 //!
-//! | method | force evaluations | v1 | u |
-//! | --- | --- | --- | --- |
-//! | explicit Euler | 1 | v0 + dt a0 | v0 |
-//! | symplectic Euler | 1 | v0 + dt a0 | v1 (after damping and contact) |
-//! | velocity Verlet | 2 | v½ + dt/2 a(x0 + dt v½), v½ = v0 + dt/2 a0 | v½ |
-//! | RK4 | 4 | v0 + dt/6 (a1 + 2a2 + 2a3 + a4) | (v0 + 2 v2 + 2 v3 + v4)/6 |
-//! | implicit Euler | 1 + CG | (M − dt² K) Δv = dt (f0 + dt K v0) | v1 (after damping and contact) |
-//!
-//! with a = f/m, and a = 0 for pinned and kinematic particles (inverse mass 0; a kinematic one
-//! keeps its velocity, a pinned one has none). The Euler methods' velocity update is the plain
-//! kick `v += dt f/m` ([`super::step::kick`], or inside the fused particle sweep).
-//!
-//! Every force evaluation, each stage's included, starts from [`body_forces`]: gravity plus the
+//! Every force evaluation, each stage's included, starts from the body forces ([`forces_at`]): gravity plus the
 //! particles' external forces, held constant over the step. Implicit Euler sees it in f0
 //! (its Jacobian has no external term: an external force is taken as independent of x).
 

@@ -28,8 +28,9 @@
 //!    projective dynamics, the start-of-step v for explicit Euler, the drift for the others),
 //!    and a check that everything stayed finite.
 //!
-//! Passes 2 (the Euler kick) to 5 can also run as one sweep over the particles ([`sweep`]),
-//! assembled from the passes in use, bit for bit the same result.
+//! By default the Bevy layer runs passes 2 (the Euler kick only: the other methods' solves run
+//! before) to 5 as one sweep over the particles ([`sweep`]), assembled from the passes in use,
+//! bit for bit the same result.
 //!
 //! Every function here takes the packed [`State`], the per-method buffers ([`Workspace`]) and
 //! the thread pool ([`Threads`]); none knows who owns the particles.
