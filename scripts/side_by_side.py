@@ -45,6 +45,24 @@ def parse_args():
     return a
 
 
+def machine():
+    """The CPU as /proc/cpuinfo names it: model, family/model numbers, widest vector extension,
+    and the cores this process may use (what `hooke bench` prints beside its figures)."""
+    info = {}
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                key, _, value = line.partition(":")
+                info.setdefault(key.strip(), value.strip())
+    except OSError:
+        return "unknown CPU"
+    flags = info.get("flags", "").split()
+    simd = "AVX-512" if "avx512f" in flags else "AVX2" if "avx2" in flags else "no AVX2"
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    return (f"{info.get('model name', 'unknown CPU')} (family {info.get('cpu family', '?')}, "
+            f"model {info.get('model', '?')}, {simd}), {cores} cores")
+
+
 def fail(msg):
     print(f"side_by_side: {msg}", file=sys.stderr)
     sys.exit(2)
@@ -83,6 +101,7 @@ def main():
             d = last_json(cmd)
             results[(name, t)].append(d["spring_updates_per_s"] / 1e6)
         print(f"round {r + 1}/{a.rounds} done", file=sys.stderr)
+    print(f"on {machine()}")
     print("M spring updates/s, 256x256 cloth, f64, symplectic Euler; range (median) over "
           f"{a.rounds} alternating rounds")
     print(f"{'implementation':15s} {'threads':>7s} {'min':>7s} {'median':>7s} {'max':>7s}")
