@@ -286,6 +286,79 @@ fn bad_flags() {
 }
 
 /// `hooke bench perf` checks its flags before measuring anything.
+/// `--separate-passes` runs the particle passes as systems of their own: the same state bit for
+/// bit (the JSON's floats round-trip).
+#[test]
+fn separate_passes_give_the_fused_result() {
+    let args = [
+        "run",
+        "--scene",
+        "cloth32",
+        "--steps",
+        "300",
+        "--json",
+        "--profile",
+    ];
+    let fused = json(&hooke(&args));
+    let o = hooke(&[&args[..], &["--separate-passes"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let separate = json(&o);
+    assert_eq!(separate["energy_end"], fused["energy_end"]);
+    assert_eq!(separate["finite"], serde_json::Value::Bool(true));
+}
+
+/// `hooke bench scale` on two small cloths, each measured in a process of its own: a report
+/// with a row per cloth and thread count, the machine named, and the memory figures present.
+#[test]
+fn bench_scale_writes_its_report() {
+    let out = temp("scale");
+    let args = [
+        "bench",
+        "scale",
+        "--widths",
+        "20,30",
+        "--threads",
+        "1",
+        "--steps",
+        "2",
+    ];
+    let o = hooke(
+        &[
+            &args[..],
+            &["--repeat", "1", "--out", out.to_str().unwrap()],
+        ]
+        .concat(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let md = std::fs::read_to_string(out.join("scale.md")).unwrap();
+    assert!(
+        md.contains("cores") && md.contains("| cloth20 |") && md.contains("| cloth30 |"),
+        "{md}"
+    );
+    let csv = std::fs::read_to_string(out.join("scale.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 2, "{csv}");
+    // width 20: 400 particles, 19·20·2 + 2·19·19 = 1482 springs; peak bytes measured on Linux.
+    let first: Vec<&str> = rows[0].split(',').collect();
+    assert_eq!(&first[..3], &["20", "400", "1482"]);
+    if cfg!(target_os = "linux") {
+        assert!(first[6].parse::<u64>().is_ok(), "peak bytes: {}", rows[0]);
+    }
+    for (flags, needle) in [
+        (&["--widths", "1"][..], "every width must be at least 2"),
+        (
+            &["--steps", "0"][..],
+            "--steps and --repeat must be at least 1",
+        ),
+    ] {
+        let bad = temp("scale-bad");
+        let mut a = vec!["bench", "scale", "--out", bad.to_str().unwrap()];
+        a.extend_from_slice(flags);
+        assert_bad_input(&hooke(&a), needle);
+        assert!(!bad.join("scale.csv").exists());
+    }
+}
+
 #[test]
 fn bad_bench_flags() {
     let cases: [(&[&str], &str); 3] = [
