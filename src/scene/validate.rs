@@ -49,7 +49,6 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
         check_stiffness(&mut p, "click", c.stiffness);
     }
 
-    let (mut n_particles, mut n_springs) = (scene.particles.len(), scene.springs.len());
     for (i, g) in scene.generate.iter().enumerate() {
         let at = format!("generate[{i}]");
         match *g {
@@ -92,10 +91,8 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
                 check_stiffness(&mut p, &at, stiffness);
             }
         }
-        let (np, ns) = g.counts();
-        n_particles = n_particles.saturating_add(np);
-        n_springs = n_springs.saturating_add(ns);
     }
+    let (n_particles, n_springs) = scene.counts();
     if n_particles > MAX_PARTICLES || n_springs > MAX_SPRINGS {
         p.push(format!(
             "the scene has {n_particles} particles and {n_springs} springs; at most \

@@ -10,7 +10,6 @@ use super::params::*;
 use super::solver::Solver;
 use super::sync::{sync_from_solver, sync_into_solver};
 use super::tear;
-use crate::solver::kernels::Motion;
 use crate::solver::step;
 use bevy::app::{FixedMain, RunFixedMainLoop, RunFixedMainLoopSystems};
 use bevy::ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
@@ -251,8 +250,10 @@ impl Plugin for SimPlugin {
                     (
                         // Body and spring forces in one parallel region, or the body forces
                         // alone when no spring force is read.
-                        forces.run_if(spring_forces_read),
-                        apply_gravity.run_if(not(spring_forces_read)),
+                        forces.run_if(scene_has_springs.and_then(integrator_reads_spring_forces)),
+                        apply_gravity.run_if(not(
+                            scene_has_springs.and_then(integrator_reads_spring_forces)
+                        )),
                     )
                         .chain()
                         .in_set(StepSystems::Forces),
@@ -289,12 +290,6 @@ pub fn scene_has_springs(solver: Res<Solver>) -> bool {
     !solver.springs.is_empty()
 }
 
-/// Run condition: the scene has springs and the integrator reads their forces at the start of
-/// the step.
-pub fn spring_forces_read(params: Res<SimParams>, solver: Res<Solver>) -> bool {
-    params.integrator.reads_spring_forces() && !solver.springs.is_empty()
-}
-
 /// Run condition: the integrator reads the spring forces at the start of the step (projective
 /// dynamics and XPBD read only the body forces, so the force pass's spring sweep does not run).
 pub fn integrator_reads_spring_forces(params: Res<SimParams>) -> bool {
@@ -308,10 +303,7 @@ pub fn integrator_is(which: Integrator) -> impl Fn(Res<SimParams>) -> bool + Clo
 
 /// Run condition: the integrator is explicit or symplectic Euler, whose update is the kick.
 pub fn euler_method(params: Res<SimParams>) -> bool {
-    matches!(
-        params.integrator,
-        Integrator::ExplicitEuler | Integrator::SymplecticEuler
-    )
+    step::motion(params.integrator).kicks()
 }
 
 /// Run condition: the particle passes run as one fused sweep ([`ParticleSweep`]).
@@ -422,11 +414,7 @@ fn particle_sweep(
     let (integrator, dt) = (params.integrator, params.dt);
     let (mu, ground) = (params.damping, params.ground);
     let sweep = step::sweep(&mut solver.state, integrator, dt, mu, ground, &threads);
-    let kicked = matches!(
-        sweep.motion,
-        Motion::ExplicitEuler | Motion::SymplecticEuler
-    );
-    n.integrate += kicked as u64;
+    n.integrate += sweep.motion.kicks() as u64;
     n.damping += sweep.decay.is_some() as u64;
     n.ground += sweep.ground.is_some() as u64;
     n.advance += 1;

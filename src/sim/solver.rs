@@ -68,7 +68,7 @@ impl Solver {
 
     /// Mean conjugate-gradient iterations per implicit Euler step so far, if any were taken.
     pub fn cg_iterations_per_step(&self) -> Option<f64> {
-        self.work.solve_stats().cg_iterations_per_step
+        self.work.scratch.cg_iterations_per_step()
     }
 
     /// What the iterative methods did so far: iterations per step, factorisations and their

@@ -157,9 +157,9 @@ pub fn sync_into_solver(
 /// out.
 ///
 /// Built for millions of springs: no hash maps (particles are ranked by creation order through
-/// their query positions, a spring's ends are read from their [`SolverIndex`]), and the springs
-/// are sorted through a permutation applied in place, so that the temporaries are a few bytes
-/// per spring beside the packed arrays themselves.
+/// their query positions, a spring's ends are read from an array by entity index), and the
+/// springs are sorted in place ([`sort_springs`]), so that the temporaries are a few bytes per
+/// spring beside the packed arrays themselves.
 fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &Springs) {
     // Rank the particles by creation order: rank[j] is the dense index of the j-th in query
     // order (which stays the same until the archetypes change, not within this system).

@@ -44,9 +44,14 @@ pub fn kick(v: &mut [DVec2], f: &[DVec2], inv_mass: &[f64], dt: f64) {
     }
 }
 
+/// The damping factor of one step, exp(−μ dt): what [`damp`] and the fused sweep multiply by.
+pub fn decay(damping: f64, dt: f64) -> f64 {
+    (-damping * dt).exp()
+}
+
 /// v *= exp(-μ dt).
 pub fn damp(v: &mut [DVec2], damping: f64, dt: f64) {
-    let decay = (-damping * dt).exp();
+    let decay = decay(damping, dt);
     for v in v {
         *v *= decay;
     }
@@ -89,6 +94,13 @@ pub enum Motion {
     /// No kick; the position update with the integrator's drift velocities (velocity Verlet,
     /// RK4, XPBD).
     Drift,
+}
+
+impl Motion {
+    /// Whether the step's velocity update is the Euler kick (run in the sweep or the kick pass).
+    pub fn kicks(self) -> bool {
+        matches!(self, Motion::ExplicitEuler | Motion::SymplecticEuler)
+    }
 }
 
 /// The particle passes of a step that run after the forces, as one sweep: what the sweep does

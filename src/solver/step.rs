@@ -248,7 +248,7 @@ pub fn sweep(
 ) -> Sweep {
     let sweep = Sweep {
         motion: motion(integrator),
-        decay: (damping != 0.0).then(|| (-damping * dt).exp()),
+        decay: (damping != 0.0).then(|| kernels::decay(damping, dt)),
         ground,
     };
     if sweep.motion == Motion::Drift {
