@@ -17,6 +17,27 @@ impl Drop for Killed {
     }
 }
 
+/// A private X server, stopped with SIGTERM when dropped: a killed (SIGKILL) Xvfb leaves
+/// its socket and lock file behind in `/tmp`, and those pile up across runs.
+struct Xvfb(Child);
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let terminated = Command::new("kill")
+            .args(["-TERM", &self.0.id().to_string()])
+            .status()
+            .is_ok_and(|s| s.success());
+        let deadline = Instant::now() + Duration::from_secs(5);
+        while terminated && Instant::now() < deadline {
+            if let Ok(Some(_)) = self.0.try_wait() {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
 /// The GUI tests run one at a time: each takes a display and the cores, and keyboard focus
 /// belongs to one window.
 static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
@@ -30,7 +51,10 @@ fn have(tool: &str) -> bool {
 }
 
 /// A display to use: `$DISPLAY`, or a private Xvfb started here.
-fn display() -> Option<(String, Option<Killed>)> {
+///
+/// Xvfb picks the display number itself (`-displayfd`): it skips displays in use and clears
+/// stale lock files, which a scan of `/tmp/.X11-unix` by hand cannot tell apart from live ones.
+fn display() -> Option<(String, Option<Xvfb>)> {
     if let Ok(d) = std::env::var("DISPLAY")
         && !d.is_empty()
     {
@@ -39,33 +63,27 @@ fn display() -> Option<(String, Option<Killed>)> {
     if !have("Xvfb") {
         return None;
     }
-    for n in 140..200 {
-        if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() {
-            continue;
-        }
-        let child = Command::new("Xvfb")
-            .args([
-                &format!(":{n}"),
-                "-screen",
-                "0",
-                "1280x800x24",
-                "-nolisten",
-                "tcp",
-            ])
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .ok()?;
-        let guard = Killed(child);
-        let deadline = Instant::now() + Duration::from_secs(10);
-        while Instant::now() < deadline {
-            if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() {
-                return Some((format!(":{n}"), Some(guard)));
-            }
-            std::thread::sleep(Duration::from_millis(100));
-        }
-    }
-    None
+    let mut child = Command::new("Xvfb")
+        .args([
+            "-displayfd",
+            "1",
+            "-screen",
+            "0",
+            "1280x800x24",
+            "-nolisten",
+            "tcp",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .ok()?;
+    let stdout = child.stdout.take()?;
+    let server = Xvfb(child);
+    // Xvfb writes the number once it listens, or exits (end of file) if it cannot start.
+    let mut line = String::new();
+    std::io::BufRead::read_line(&mut std::io::BufReader::new(stdout), &mut line).ok()?;
+    let n: u32 = line.trim().parse().ok()?;
+    Some((format!(":{n}"), Some(server)))
 }
 
 fn status(path: &Path) -> Option<serde_json::Value> {
@@ -164,10 +182,13 @@ fn pixels_around(png: &Path, x: i64, y: i64, r: i64) -> Vec<(u8, u8, u8)> {
 }
 
 /// A display and the tools, or `None` with the reason printed (under CI: a failure).
-fn gui_display(tools: &[&str]) -> Option<(String, Option<Killed>)> {
+fn gui_display(tools: &[&str]) -> Option<(String, Option<Xvfb>)> {
     let in_ci = std::env::var_os("CI").is_some();
     let Some(found) = display() else {
-        assert!(!in_ci, "CI must provide Xvfb for the GUI test");
+        assert!(
+            !in_ci,
+            "CI must provide a display: no $DISPLAY, and Xvfb is missing or did not start"
+        );
         println!("skipped: no DISPLAY and no Xvfb on this machine");
         return None;
     };
