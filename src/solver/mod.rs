@@ -15,6 +15,7 @@
 //!   colouring. They hold invariants (array lengths, index order, thread-part boundaries) that
 //!   only the packing maintains.
 
+pub(crate) mod cholesky;
 pub(crate) mod integrators;
 pub(crate) mod kernels;
 pub mod method;

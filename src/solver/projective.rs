@@ -22,14 +22,16 @@
 //! with v1 = (x1 − x0)/h; damping, ground contact and the position update follow as for
 //! implicit Euler.
 
+use super::cholesky::{Below, Factor};
 use super::parallel::{PairPass, SpringBuffers, Threads, scatter};
+use super::spring::{projection, scatter_pairs};
 use super::state::{PackedSpring, State};
+#[cfg(target_arch = "x86_64")]
+use super::wide;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::SupernodalThreshold;
-use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, factorize_symbolic_cholesky,
-};
+use faer::sparse::linalg::cholesky::{CholeskySymbolicParams, factorize_symbolic_cholesky};
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Par, Side};
 use glam::DVec2;
@@ -54,9 +56,8 @@ pub struct Projective {
     particle: Vec<u32>,
     /// Springs with exactly one free end: (free end's row, fixed end, h² k).
     boundary: Vec<(u32, u32, f64)>,
-    /// The factor's structure, supernode by supernode (see [`Supernodes`]).
-    supernodes: Supernodes,
-    factor: Vec<f64>,
+    /// The factor, supernode by supernode.
+    factor: Factor,
     /// Particle of each row of the factor (the fill-reducing order).
     order: Vec<u32>,
     /// The iterate, all particles.
@@ -65,9 +66,11 @@ pub struct Projective {
     my: Vec<DVec2>,
     /// The right-hand side, all particles, before the gather.
     b: Vec<DVec2>,
-    /// The right-hand side in the factor's row order, then the solution: x and y side by side,
-    /// so that each nonzero of the factor is read once for both.
-    rhs: Vec<DVec2>,
+    /// The right-hand side in the factor's row order, then the solution, x and y apart, solved
+    /// together so that each nonzero of the factor is read once for both.
+    rhs_x: Vec<f64>,
+    rhs_y: Vec<f64>,
+    below: Below,
     buffers: SpringBuffers,
     /// Factorisations so far.
     pub factorizations: u64,
@@ -83,13 +86,14 @@ impl std::fmt::Debug for Projective {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Projective")
             .field("rows", &self.particle.len())
-            .field("factor_nonzeros", &self.factor.len())
+            .field("factor_nonzeros", &self.factor.l.len())
             .field("factorizations", &self.factorizations)
             .finish_non_exhaustive()
     }
 }
 
-/// The local step's right-hand side: h² k_s d_s to end a, −h² k_s d_s to end b.
+/// The local step's right-hand side: h² k_s d_s to end a, −h² k_s d_s to end b, four springs
+/// at a time where the CPU has AVX.
 struct LocalStep<'z> {
     z: &'z [DVec2],
     h2: f64,
@@ -98,17 +102,14 @@ struct LocalStep<'z> {
 impl PairPass for LocalStep<'_> {
     type Pair = PackedSpring;
     #[inline(always)]
-    fn run(&self, springs: &[PackedSpring], mut add: impl FnMut(usize, DVec2)) {
-        for s in springs {
-            let (a, b) = (s.a as usize, s.b as usize);
-            let l = self.z[a] - self.z[b];
-            let len = l.length();
-            // Coincident ends: d = l (no force), as the spring force kernel does.
-            let d = if len > 0.0 { l * (s.rest / len) } else { l };
-            let c = d * (self.h2 * s.k);
-            add(a, c);
-            add(b, -c);
+    fn run(&self, springs: &[PackedSpring], add: impl FnMut(usize, DVec2)) {
+        #[cfg(target_arch = "x86_64")]
+        if wide::available() {
+            // SAFETY: the CPU has AVX, checked just above.
+            unsafe { wide::for_each_projection(self.z, springs, self.h2, add) };
+            return;
         }
+        scatter_pairs(springs, |s| Some(projection(s, self.z, self.h2)), add);
     }
 }
 
@@ -180,14 +181,13 @@ impl Projective {
                     format!("projective dynamics: symbolic factorisation failed: {e:?}")
                 })?;
         let par = parallelism(threads, s.springs.len());
-        self.factor.clear();
-        self.factor.resize(symbolic.len_val(), 0.0);
+        self.factor = Factor::of(&symbolic)?;
         let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
         let mut stack = MemBuffer::try_new(scratch)
             .map_err(|_| "projective dynamics: out of memory for the factorisation".to_string())?;
         symbolic
             .factorize_numeric_llt::<f64>(
-                &mut self.factor,
+                &mut self.factor.l,
                 matrix.as_ref(),
                 Side::Lower,
                 LltRegularization::default(),
@@ -196,7 +196,7 @@ impl Projective {
                 Default::default(),
             )
             .map_err(|e| format!("projective dynamics: M + h²L is not positive definite: {e:?}"))?;
-        self.supernodes = Supernodes::of(&symbolic)?;
+        self.factor.finish();
         // Row p of the factor is row fwd[p] of the matrix.
         self.order = match symbolic.perm() {
             Some(perm) => perm.arrays().0.iter().map(|&r| self.particle[r]).collect(),
@@ -206,7 +206,8 @@ impl Projective {
         for buf in [&mut self.z, &mut self.my, &mut self.b] {
             buf.resize(n, DVec2::ZERO);
         }
-        self.rhs.resize(rows, DVec2::ZERO);
+        self.rhs_x.resize(rows, 0.0);
+        self.rhs_y.resize(rows, 0.0);
         self.buffers = SpringBuffers::default();
         self.key = Some(key);
         self.factorizations += 1;
@@ -216,117 +217,12 @@ impl Projective {
 
     /// Nonzeros of the Cholesky factor (0 before the first step).
     pub fn factor_nonzeros(&self) -> usize {
-        self.factor.len()
+        self.factor.l.len()
     }
 
     /// Mean iterations per step so far, if any step was taken.
     pub fn iterations_per_step(&self) -> Option<f64> {
         (self.steps > 0).then(|| self.iterations as f64 / self.steps as f64)
-    }
-}
-
-/// The supernodal structure of the factor L: supernode s spans columns
-/// `begin[s]..begin[s + 1]`; its values are a dense column-major block of
-/// (columns + pattern rows) × columns starting at `values[s]`, the diagonal block on top and
-/// then the rows `row[pattern[s]..pattern[s + 1]]` below it.
-#[derive(Debug, Default, Clone)]
-struct Supernodes {
-    begin: Vec<usize>,
-    values: Vec<usize>,
-    pattern: Vec<usize>,
-    row: Vec<u32>,
-}
-
-impl Supernodes {
-    fn of(symbolic: &SymbolicCholesky<usize>) -> Result<Supernodes, String> {
-        let s = match symbolic.raw() {
-            SymbolicCholeskyRaw::Supernodal(s) => s,
-            // faer keeps a tiny matrix simplicial whatever is asked: each column, its diagonal
-            // first (rows ascending), is then a supernode of one column.
-            SymbolicCholeskyRaw::Simplicial(s) => {
-                let (col, rows) = (s.col_ptr(), s.row_idx());
-                let n = s.nrows();
-                let mut pattern = Vec::with_capacity(n + 1);
-                let mut row = Vec::new();
-                for j in 0..n {
-                    pattern.push(row.len());
-                    if rows.get(col[j]) != Some(&j) {
-                        return Err("projective dynamics: unexpected factor layout".into());
-                    }
-                    row.extend(rows[col[j] + 1..col[j + 1]].iter().map(|&r| r as u32));
-                }
-                pattern.push(row.len());
-                return Ok(Supernodes {
-                    begin: (0..=n).collect(),
-                    values: col[..=n].to_vec(),
-                    pattern,
-                    row,
-                });
-            }
-        };
-        let n = s.n_supernodes();
-        let pattern_start = s.col_ptr_for_row_idx();
-        let mut pattern = Vec::with_capacity(n + 1);
-        let mut row = Vec::new();
-        for (p, &len) in s.nnz_per_super().iter().enumerate().take(n) {
-            pattern.push(row.len());
-            let start = pattern_start[p];
-            row.extend(s.row_idx()[start..start + len].iter().map(|&r| r as u32));
-        }
-        pattern.push(row.len());
-        Ok(Supernodes {
-            begin: s
-                .supernode_begin()
-                .iter()
-                .copied()
-                .chain(s.supernode_end().last().copied())
-                .collect(),
-            values: s.col_ptr_for_val()[..=n].to_vec(),
-            pattern,
-            row,
-        })
-    }
-
-    /// Solves L Lᵀ x = b in place, x and y together: forward through the supernodes, then
-    /// back. Each nonzero of L is read once per substitution for both components.
-    fn solve(&self, l: &[f64], x: &mut [DVec2]) {
-        let n = self.begin.len() - 1;
-        // L y = b.
-        for s in 0..n {
-            let (start, cols) = (self.begin[s], self.begin[s + 1] - self.begin[s]);
-            let pattern = &self.row[self.pattern[s]..self.pattern[s + 1]];
-            let rows = cols + pattern.len();
-            let block = &l[self.values[s]..self.values[s] + rows * cols];
-            for j in 0..cols {
-                let col = &block[j * rows..(j + 1) * rows];
-                let xj = x[start + j] / col[j];
-                x[start + j] = xj;
-                for i in j + 1..cols {
-                    x[start + i] -= xj * col[i];
-                }
-                for (&r, &v) in pattern.iter().zip(&col[cols..]) {
-                    x[r as usize] -= xj * v;
-                }
-            }
-        }
-        // Lᵀ x = y.
-        for s in (0..n).rev() {
-            let (start, cols) = (self.begin[s], self.begin[s + 1] - self.begin[s]);
-            let pattern = &self.row[self.pattern[s]..self.pattern[s + 1]];
-            let rows = cols + pattern.len();
-            let block = &l[self.values[s]..self.values[s] + rows * cols];
-            for j in (0..cols).rev() {
-                let col = &block[j * rows..(j + 1) * rows];
-                let mut acc = x[start + j];
-                for (&r, &v) in pattern.iter().zip(&col[cols..]) {
-                    acc -= x[r as usize] * v;
-                }
-                for i in j + 1..cols {
-                    acc -= x[start + i] * col[i];
-                }
-                x[start + j] = acc / col[j];
-            }
-        }
     }
 }
 
@@ -382,12 +278,14 @@ impl Projective {
                 let i = self.particle[r as usize] as usize;
                 self.b[i] += p;
             }
-            for (b, &i) in self.rhs.iter_mut().zip(&self.order) {
-                *b = self.b[i as usize];
+            for ((bx, by), &i) in self.rhs_x.iter_mut().zip(&mut self.rhs_y).zip(&self.order) {
+                let b = self.b[i as usize];
+                (*bx, *by) = (b.x, b.y);
             }
-            self.supernodes.solve(&self.factor, &mut self.rhs);
-            for (x, &i) in self.rhs.iter().zip(&self.order) {
-                self.z[i as usize] = *x;
+            self.factor
+                .solve(&mut self.rhs_x, &mut self.rhs_y, &mut self.below);
+            for ((&x, &y), &i) in self.rhs_x.iter().zip(&self.rhs_y).zip(&self.order) {
+                self.z[i as usize] = DVec2::new(x, y);
             }
         }
         let inv_h = 1.0 / dt;

@@ -1,6 +1,7 @@
-//! One spring's force, and the scatter's running sum: what the scalar and the AVX spring
-//! passes ([`super::kernels::for_each_spring_force`], [`super::wide`]) and the stiffness
-//! product ([`super::stiffness`]) share.
+//! One spring's force and its projective dynamics projection, and the scatter's running sum:
+//! what the scalar and the AVX spring passes ([`super::kernels::for_each_spring_force`],
+//! [`super::wide`]), the stiffness product ([`super::stiffness`]) and projective dynamics'
+//! local step share.
 
 use super::state::PackedSpring;
 use glam::DVec2;
@@ -19,6 +20,16 @@ pub fn spring_force(s: &PackedSpring, x: &[DVec2]) -> Option<DVec2> {
         return None;
     }
     Some(d * (-s.k * (l - s.rest) / l))
+}
+
+/// One spring's local step contribution to its end a: h²k · l (L / |l|), l = x_a − x_b, or
+/// h²k · l where |l| is 0 or not a number (the ends coincide: no direction to project on).
+#[inline]
+pub fn projection(s: &PackedSpring, x: &[DVec2], h2: f64) -> DVec2 {
+    let l = x[s.a as usize] - x[s.b as usize];
+    let len = l.length();
+    let d = if len > 0.0 { l * (s.rest / len) } else { l };
+    d * (h2 * s.k)
 }
 
 /// For each spring, `add(a, g)` and `add(b, -g)` with `g = force(spring)` (nothing for `None`),
