@@ -86,6 +86,20 @@ impl Threads {
         }
     }
 
+    /// Runs `a` and `b` at once on the pool if there is one and the caller says the work is
+    /// worth `sharing`, else one after the other.
+    pub fn join<A: Send, B: Send>(
+        &self,
+        sharing: bool,
+        a: impl FnOnce() -> A + Send,
+        b: impl FnOnce() -> B + Send,
+    ) -> (A, B) {
+        match self.pool.as_deref() {
+            Some(pool) if sharing => pool.install(|| rayon::join(a, b)),
+            _ => (a(), b()),
+        }
+    }
+
     /// The pool, when the work is big enough to share.
     fn pool_for(&self, springs: usize) -> Option<&rayon::ThreadPool> {
         self.pool

@@ -22,7 +22,7 @@
 //! with v1 = (x1 − x0)/h; damping, ground contact and the position update follow as for
 //! implicit Euler.
 
-use super::cholesky::{Below, Factor};
+use super::cholesky::{Factor, Substitution};
 use super::parallel::{PairPass, SpringBuffers, Threads, scatter};
 use super::spring::{projection, scatter_pairs};
 use super::state::{PackedSpring, State};
@@ -70,7 +70,7 @@ pub struct Projective {
     /// together so that each nonzero of the factor is read once for both.
     rhs_x: Vec<f64>,
     rhs_y: Vec<f64>,
-    below: Below,
+    substitution: Substitution,
     buffers: SpringBuffers,
     /// Factorisations so far.
     pub factorizations: u64,
@@ -282,8 +282,12 @@ impl Projective {
                 let b = self.b[i as usize];
                 (*bx, *by) = (b.x, b.y);
             }
-            self.factor
-                .solve(&mut self.rhs_x, &mut self.rhs_y, &mut self.below);
+            self.factor.solve(
+                &mut self.rhs_x,
+                &mut self.rhs_y,
+                &mut self.substitution,
+                threads,
+            );
             for ((&x, &y), &i) in self.rhs_x.iter().zip(&self.rhs_y).zip(&self.order) {
                 self.z[i as usize] = DVec2::new(x, y);
             }
