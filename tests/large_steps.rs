@@ -369,3 +369,25 @@ fn degenerate_scenes_step_under_every_integrator() {
         }
     }
 }
+
+/// The static sag's reference, the potential minimised directly (`hooke bench large-steps`),
+/// finds the hanging chain's exact shape from its unstretched start, with no external force
+/// set (the solver then stores no external forces at all).
+#[test]
+fn the_direct_minimiser_finds_the_hanging_chains_static_shape() {
+    let (n, k) = (10, 1e4);
+    let app = app_with(hanging_chain(Integrator::SymplecticEuler, 1e-4, n, k));
+    let solver = app.world().resource::<sim::Solver>();
+    assert!(solver.external().is_empty());
+    let start = solver.x().to_vec();
+    let (eq, residual) =
+        hooke::bench::equilibrium::equilibrium(solver, &start, DVec2::new(0.0, -9.8));
+    assert!(residual < 1e-6, "largest residual force {residual:e} N");
+    let drop = eq[0].y - eq[n].y - 0.04 * n as f64;
+    let exact = static_drop(n, k);
+    assert!(
+        (drop - exact).abs() < 1e-9 * exact.max(1.0),
+        "drop {drop:e}, exact {exact:e}"
+    );
+    assert_eq!(eq[0], start[0], "the pinned particle stays");
+}

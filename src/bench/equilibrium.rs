@@ -13,7 +13,7 @@ use bevy::math::DVec2;
 fn forces(s: &Solver, x: &[DVec2], gravity: DVec2, out: &mut [DVec2]) {
     for (i, o) in out.iter_mut().enumerate().take(x.len()) {
         *o = if s.inv_mass()[i] != 0.0 {
-            gravity * s.mass()[i] + s.external()[i]
+            gravity * s.mass()[i] + s.external_force(i)
         } else {
             DVec2::ZERO
         };
@@ -28,7 +28,7 @@ fn forces(s: &Solver, x: &[DVec2], gravity: DVec2, out: &mut [DVec2]) {
 fn potential(s: &Solver, x: &[DVec2], gravity: DVec2) -> f64 {
     let mut u = 0.0;
     for (i, p) in x.iter().enumerate() {
-        u -= (gravity * s.mass()[i] + s.external()[i]).dot(*p);
+        u -= (gravity * s.mass()[i] + s.external_force(i)).dot(*p);
     }
     for sp in s.springs() {
         let PackedSpring { a, b, rest, k } = *sp;

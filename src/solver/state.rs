@@ -77,10 +77,14 @@ impl State {
     pub fn inv_mass(&self) -> &[f64] {
         &self.inv_mass
     }
-    /// Each particle's external force, N ; empty while
-    /// none is set.
+    /// Each particle's external force, N; empty while none is set (see
+    /// [`Self::external_force`] for one particle's).
     pub fn external(&self) -> &[DVec2] {
         &self.external
+    }
+    /// Particle i's external force, N (zero while none is set).
+    pub fn external_force(&self, i: usize) -> DVec2 {
+        self.external.get(i).copied().unwrap_or(DVec2::ZERO)
     }
     /// Whether some external force is non-zero.
     pub fn external_active(&self) -> bool {
