@@ -63,10 +63,11 @@ struct Span<'a> {
     y: &'a mut [f64],
 }
 
-/// Factors with fewer values than this solve their halves one after the other: waking a
-/// second thread twice a solve cost what it gained at 64² (150 k values, 0.2 ms a solve),
-/// and at 256² (3.4 M values) the halves at once made the whole step 1.25× faster.
-const PARALLEL_MIN_VALUES: usize = 1 << 20;
+/// Factors with fewer values than this solve their halves one after the other, on the
+/// calling thread. Measured on a 2-core AMD EPYC with the halves at once, alternating runs
+/// (projective dynamics, dt = 1/60 s, 2 threads, 600 steps): 64² (150 k values) went from
+/// 4.1–4.8 to 3.1–3.9 ms a step, 256² (3.4 M) from 122–137 to 96–112 ms.
+const PARALLEL_MIN_VALUES: usize = 1 << 16;
 
 /// The slot of a row that no half shares.
 const NOT_SHARED: u32 = u32::MAX;
