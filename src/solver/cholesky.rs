@@ -672,7 +672,9 @@ mod tests {
     use super::*;
     use faer::Side;
     use faer::sparse::linalg::SupernodalThreshold;
-    use faer::sparse::linalg::cholesky::{CholeskySymbolicParams, factorize_symbolic_cholesky};
+    use faer::sparse::linalg::cholesky::{
+        CholeskySymbolicParams, SymbolicCholesky, factorize_symbolic_cholesky,
+    };
     use faer::sparse::{SparseColMat, Triplet};
 
     /// The 2D Laplacian of a w × w grid with 8 neighbours, plus a diagonal shift: SPD, and
@@ -705,34 +707,85 @@ mod tests {
         (n, t)
     }
 
+    /// The factor of the matrix `t` (n × n), and faer's symbolic factorisation.
+    fn factor(n: usize, t: &[Triplet<usize, usize, f64>]) -> (Factor, SymbolicCholesky<usize>) {
+        let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, t).unwrap();
+        let params = CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+            ..Default::default()
+        };
+        let symbolic =
+            factorize_symbolic_cholesky(a.symbolic(), Side::Lower, Default::default(), params)
+                .unwrap();
+        let mut f = Factor::of(&symbolic).unwrap();
+        let par = faer::Par::Seq;
+        let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
+        let mut stack = faer::dyn_stack::MemBuffer::new(scratch);
+        symbolic
+            .factorize_numeric_llt::<f64>(
+                &mut f.l,
+                a.as_ref(),
+                Side::Lower,
+                Default::default(),
+                par,
+                faer::dyn_stack::MemStack::new(&mut stack),
+                Default::default(),
+            )
+            .unwrap();
+        f.finish();
+        (f, symbolic)
+    }
+
+    /// Figures, no assertion on time: a solve of the 256² grid's factor on 1 and 2 threads
+    /// against one plain read of its values, which bounds what any substitution can cost
+    /// (`cargo test --release --lib substitutions_against -- --ignored --nocapture`).
+    #[test]
+    #[ignore = "a measurement: prints figures"]
+    fn substitutions_against_one_read_of_the_factor() {
+        let (n, t) = grid_matrix(256);
+        let (f, _) = factor(n, &t);
+        let time = |run: &mut dyn FnMut()| {
+            run();
+            let start = std::time::Instant::now();
+            for _ in 0..20 {
+                run();
+            }
+            start.elapsed().as_secs_f64() / 20.0 * 1e3
+        };
+        let read = time(&mut || {
+            let mut acc = [0.0f64; 4];
+            for c in f.l.chunks_exact(4) {
+                for q in 0..4 {
+                    acc[q] += c[q];
+                }
+            }
+            std::hint::black_box(acc);
+        });
+        let mut line = format!(
+            "{}: factor of {} values ({:.1} MB); one read {read:.2} ms",
+            crate::bench::machine(),
+            f.l.len(),
+            f.l.len() as f64 * 8e-6
+        );
+        for threads in [1, 2] {
+            let pool = Threads::new(threads).unwrap();
+            let (mut x, mut y) = (vec![0.0; n], vec![0.0; n]);
+            let mut work = Substitution::default();
+            let ms = time(&mut || {
+                x.fill(1.0);
+                y.fill(0.5);
+                f.solve(&mut x, &mut y, &mut work, &pool);
+            });
+            line += &format!("; solve on {threads} thread(s) {ms:.2} ms");
+        }
+        println!("{line}");
+    }
+
     #[test]
     fn the_substitutions_solve_the_system() {
         for w in [1, 2, 5, 23, 40, 180] {
             let (n, t) = grid_matrix(w);
-            let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &t).unwrap();
-            let params = CholeskySymbolicParams {
-                supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
-                ..Default::default()
-            };
-            let symbolic =
-                factorize_symbolic_cholesky(a.symbolic(), Side::Lower, Default::default(), params)
-                    .unwrap();
-            let mut f = Factor::of(&symbolic).unwrap();
-            let par = faer::Par::Seq;
-            let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
-            let mut stack = faer::dyn_stack::MemBuffer::new(scratch);
-            symbolic
-                .factorize_numeric_llt::<f64>(
-                    &mut f.l,
-                    a.as_ref(),
-                    Side::Lower,
-                    Default::default(),
-                    par,
-                    faer::dyn_stack::MemStack::new(&mut stack),
-                    Default::default(),
-                )
-                .unwrap();
-            f.finish();
+            let (f, symbolic) = factor(n, &t);
             // b = A u for a known u, permuted into the factor's order.
             let u: Vec<(f64, f64)> = (0..n)
                 .map(|i| ((i as f64 * 0.37).sin(), (i as f64 * 0.11).cos()))
