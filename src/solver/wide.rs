@@ -52,6 +52,44 @@ pub unsafe fn for_each_spring_force(
     run.finish(add);
 }
 
+/// Four springs' d = x_a − x_b, two springs per register ([d0, d1], [d2, d3]), and their
+/// lengths √(d·d) in the lane order [0, 2, 1, 3] (`_mm256_hadd_pd` works within 128-bit lanes).
+///
+/// # Safety
+/// The CPU must support AVX ([`available`]); always inlined, it inherits AVX from its caller.
+#[inline(always)]
+unsafe fn four_differences(x: &[DVec2], s: &[PackedSpring]) -> (__m256d, __m256d, __m256d) {
+    let (s0, s1, s2, s3) = (&s[0], &s[1], &s[2], &s[3]);
+    let (a0, b0, a1, b1) = (
+        x[s0.a as usize],
+        x[s0.b as usize],
+        x[s1.a as usize],
+        x[s1.b as usize],
+    );
+    let (a2, b2, a3, b3) = (
+        x[s2.a as usize],
+        x[s2.b as usize],
+        x[s3.a as usize],
+        x[s3.b as usize],
+    );
+    // SAFETY: the caller guarantees AVX.
+    unsafe {
+        let d01 = _mm256_sub_pd(
+            _mm256_set_pd(a1.y, a1.x, a0.y, a0.x),
+            _mm256_set_pd(b1.y, b1.x, b0.y, b0.x),
+        );
+        let d23 = _mm256_sub_pd(
+            _mm256_set_pd(a3.y, a3.x, a2.y, a2.x),
+            _mm256_set_pd(b3.y, b3.x, b2.y, b2.x),
+        );
+        let l = _mm256_sqrt_pd(_mm256_hadd_pd(
+            _mm256_mul_pd(d01, d01),
+            _mm256_mul_pd(d23, d23),
+        ));
+        (d01, d23, l)
+    }
+}
+
 /// Writes the forces on the a ends of four springs to `out` (x0, y0, x1, y1, ...) and returns a
 /// mask of the springs shorter than [`MIN_SPRING_LENGTH`] (bit i for spring i), whose forces
 /// are to be skipped, as in the scalar kernel.
@@ -66,32 +104,7 @@ unsafe fn four_forces(x: &[DVec2], s: &[PackedSpring], out: &mut [f64; 8]) -> i3
     // SAFETY: the caller guarantees AVX; the stores write the eight f64 of `out`.
     unsafe {
         let (s0, s1, s2, s3) = (&s[0], &s[1], &s[2], &s[3]);
-        let (a0, b0, a1, b1) = (
-            x[s0.a as usize],
-            x[s0.b as usize],
-            x[s1.a as usize],
-            x[s1.b as usize],
-        );
-        let (a2, b2, a3, b3) = (
-            x[s2.a as usize],
-            x[s2.b as usize],
-            x[s3.a as usize],
-            x[s3.b as usize],
-        );
-        // d = x_a − x_b, two springs per register: [d0, d1] and [d2, d3].
-        let d01 = _mm256_sub_pd(
-            _mm256_set_pd(a1.y, a1.x, a0.y, a0.x),
-            _mm256_set_pd(b1.y, b1.x, b0.y, b0.x),
-        );
-        let d23 = _mm256_sub_pd(
-            _mm256_set_pd(a3.y, a3.x, a2.y, a2.x),
-            _mm256_set_pd(b3.y, b3.x, b2.y, b2.x),
-        );
-        // hadd of the squares: [l0², l2², l1², l3²] (it works within 128-bit lanes).
-        let l = _mm256_sqrt_pd(_mm256_hadd_pd(
-            _mm256_mul_pd(d01, d01),
-            _mm256_mul_pd(d23, d23),
-        ));
+        let (d01, d23, l) = four_differences(x, s);
         // _mm256_set_pd takes the lanes high to low: these are in l's order [0, 2, 1, 3].
         let neg_k = _mm256_set_pd(-s3.k, -s1.k, -s2.k, -s0.k);
         let rest = _mm256_set_pd(s3.rest, s1.rest, s2.rest, s0.rest);
@@ -155,31 +168,7 @@ unsafe fn four_projections(x: &[DVec2], s: &[PackedSpring], h2: f64, out: &mut [
     // SAFETY: the caller guarantees AVX; the stores write the eight f64 of `out`.
     unsafe {
         let (s0, s1, s2, s3) = (&s[0], &s[1], &s[2], &s[3]);
-        let (a0, b0, a1, b1) = (
-            x[s0.a as usize],
-            x[s0.b as usize],
-            x[s1.a as usize],
-            x[s1.b as usize],
-        );
-        let (a2, b2, a3, b3) = (
-            x[s2.a as usize],
-            x[s2.b as usize],
-            x[s3.a as usize],
-            x[s3.b as usize],
-        );
-        let d01 = _mm256_sub_pd(
-            _mm256_set_pd(a1.y, a1.x, a0.y, a0.x),
-            _mm256_set_pd(b1.y, b1.x, b0.y, b0.x),
-        );
-        let d23 = _mm256_sub_pd(
-            _mm256_set_pd(a3.y, a3.x, a2.y, a2.x),
-            _mm256_set_pd(b3.y, b3.x, b2.y, b2.x),
-        );
-        // Lengths in the lane order [0, 2, 1, 3] (see four_forces).
-        let l = _mm256_sqrt_pd(_mm256_hadd_pd(
-            _mm256_mul_pd(d01, d01),
-            _mm256_mul_pd(d23, d23),
-        ));
+        let (d01, d23, l) = four_differences(x, s);
         let rest = _mm256_set_pd(s3.rest, s1.rest, s2.rest, s0.rest);
         // L / |l| where |l| > 0, else 1 (NaN compares false): d = l · 1 = l exactly.
         let positive = _mm256_cmp_pd::<_CMP_GT_OQ>(l, _mm256_setzero_pd());
