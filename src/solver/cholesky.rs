@@ -17,6 +17,7 @@
 //! column's critical path. The lane order is fixed, so the result is the same bits on every
 //! CPU and thread count.
 
+use super::etree::{NOT_SHARED, TreeSplit};
 use super::parallel::Threads;
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 
@@ -63,177 +64,16 @@ struct Span<'a> {
     y: &'a mut [f64],
 }
 
+/// The halves' columns of x and y ([`TreeSplit::halves`]).
+fn spans<'a>(split: &TreeSplit, x: &'a mut [f64], y: &'a mut [f64]) -> [Span<'a>; 2] {
+    split.halves(x, y).map(|(lo, x, y)| Span { lo, x, y })
+}
+
 /// Factors with fewer values than this solve their halves one after the other, on the
 /// calling thread. Measured on a 2-core AMD EPYC with the halves at once, alternating runs
 /// (projective dynamics, dt = 1/60 s, 2 threads, 600 steps): 64² (150 k values) went from
 /// 4.1–4.8 to 3.1–3.9 ms a step, 256² (3.4 M) from 122–137 to 96–112 ms.
 const PARALLEL_MIN_VALUES: usize = 1 << 16;
-
-/// The slot of a row that no half shares.
-const NOT_SHARED: u32 = u32::MAX;
-
-/// The elimination tree cut into two halves that the substitutions can run at once, and the
-/// shared supernodes above them.
-///
-/// faer numbers the supernodes in postorder, so a subtree is a run of consecutive supernodes
-/// and columns. A supernode's forward updates go only to its ancestors, and its back
-/// substitution reads only theirs. Two sets of disjoint subtrees therefore touch disjoint
-/// columns, except for their common ancestors (the shared supernodes, at the top of the
-/// tree): each half sends its updates of those rows to its own buffer in the forward pass,
-/// and reads them from a copy in the backward pass.
-#[derive(Debug, Clone)]
-struct TreeSplit {
-    groups: [Half; 2],
-    /// The shared supernodes, ascending.
-    top: Vec<u32>,
-    /// Each column's index among the shared rows, or [`NOT_SHARED`].
-    slot: Vec<u32>,
-    /// The shared rows, by slot.
-    top_rows: Vec<u32>,
-}
-
-/// One half: whole subtrees, each a run of supernodes, in one column range.
-#[derive(Debug, Clone)]
-struct Half {
-    subtrees: Vec<std::ops::Range<usize>>,
-    columns: std::ops::Range<usize>,
-}
-
-impl Half {
-    fn supernodes(&self) -> impl DoubleEndedIterator<Item = usize> + '_ {
-        self.subtrees.iter().flat_map(|r| r.clone())
-    }
-}
-
-impl TreeSplit {
-    /// The halves' columns of x and y, as two disjoint spans.
-    fn spans<'a>(&self, x: &'a mut [f64], y: &'a mut [f64]) -> (Span<'a>, Span<'a>) {
-        let [a, b] = &self.groups;
-        let (xa, xb) = x.split_at_mut(b.columns.start);
-        let (ya, yb) = y.split_at_mut(b.columns.start);
-        let len_b = b.columns.len();
-        (
-            Span {
-                lo: a.columns.start,
-                x: &mut xa[a.columns.clone()],
-                y: &mut ya[a.columns.clone()],
-            },
-            Span {
-                lo: b.columns.start,
-                x: &mut xb[..len_b],
-                y: &mut yb[..len_b],
-            },
-        )
-    }
-
-    /// Cuts the tree of supernodes `begin` (columns), `pattern` and `row` (their rows below)
-    /// into two halves of nearly equal work, or `None` when the tree does not split well
-    /// (a chain, or most of the work at the top) or is not in postorder.
-    fn of(begin: &[usize], pattern: &[usize], row: &[u32]) -> Option<TreeSplit> {
-        let n = begin.len() - 1;
-        let columns = begin[n];
-        let mut supernode_of = vec![0u32; columns];
-        for s in 0..n {
-            supernode_of[begin[s]..begin[s + 1]].fill(s as u32);
-        }
-        let rows_below = |s: usize| &row[pattern[s]..pattern[s + 1]];
-        let parent: Vec<Option<usize>> = (0..n)
-            .map(|s| {
-                rows_below(s)
-                    .iter()
-                    .min()
-                    .map(|&r| supernode_of[r as usize] as usize)
-            })
-            .collect();
-        // Work (values of the block), subtree sizes and first descendants, children first.
-        let mut work: Vec<f64> = (0..n)
-            .map(|s| {
-                let cols = begin[s + 1] - begin[s];
-                ((cols + rows_below(s).len()) * cols) as f64
-            })
-            .collect();
-        let own = work.clone();
-        let mut size = vec![1usize; n];
-        let mut first = (0..n).collect::<Vec<_>>();
-        let mut children = vec![vec![]; n];
-        for s in 0..n {
-            if let Some(p) = parent[s] {
-                if p <= s {
-                    return None;
-                }
-                work[p] += work[s];
-                size[p] += size[s];
-                first[p] = first[p].min(first[s]);
-                children[p].push(s);
-            }
-        }
-        // Postorder: every subtree is the run of supernodes that ends at its root.
-        if (0..n).any(|s| first[s] + size[s] != s + 1) {
-            return None;
-        }
-        let total: f64 = own.iter().sum();
-        let mut candidates: Vec<usize> = (0..n).filter(|&s| parent[s].is_none()).collect();
-        let mut top = vec![];
-        let mut top_work = 0.0;
-        loop {
-            candidates.sort_unstable();
-            // The best cut of the candidates, in order, into a first and a second half.
-            let sum: f64 = candidates.iter().map(|&c| work[c]).sum();
-            let mut prefix = 0.0;
-            let mut best = (f64::INFINITY, 0);
-            for (k, &c) in candidates
-                .iter()
-                .enumerate()
-                .take(candidates.len().saturating_sub(1))
-            {
-                prefix += work[c];
-                let worst = prefix.max(sum - prefix);
-                if worst < best.0 {
-                    best = (worst, k + 1);
-                }
-            }
-            if best.0 <= 0.55 * sum {
-                let (a, b) = candidates.split_at(best.1);
-                let half = |cs: &[usize]| Half {
-                    subtrees: cs.iter().map(|&c| first[c]..c + 1).collect(),
-                    columns: begin[first[cs[0]]]..begin[cs[cs.len() - 1] + 1],
-                };
-                top.sort_unstable();
-                let mut slot = vec![NOT_SHARED; columns];
-                let mut top_rows = vec![];
-                for &t in &top {
-                    for (r, q) in slot
-                        .iter_mut()
-                        .enumerate()
-                        .take(begin[t + 1])
-                        .skip(begin[t])
-                    {
-                        *q = top_rows.len() as u32;
-                        top_rows.push(r as u32);
-                    }
-                }
-                return Some(TreeSplit {
-                    groups: [half(a), half(b)],
-                    top: top.into_iter().map(|t| t as u32).collect(),
-                    slot,
-                    top_rows,
-                });
-            }
-            // Open up the biggest subtree: its root joins the shared top.
-            let (i, &c) = candidates
-                .iter()
-                .enumerate()
-                .max_by(|a, b| work[*a.1].total_cmp(&work[*b.1]))?;
-            top_work += own[c];
-            if children[c].is_empty() || top_work > 0.5 * total {
-                return None;
-            }
-            candidates.swap_remove(i);
-            top.push(c);
-            candidates.extend(&children[c]);
-        }
-    }
-}
 
 impl Factor {
     /// The structure of `symbolic`'s factor, with room for its values.
@@ -338,7 +178,7 @@ impl Factor {
         // Forward: the halves, each sending its updates of the shared rows to its own buffer;
         // those added in a fixed order; then the shared supernodes.
         {
-            let (mut a, mut b) = split.spans(x, y);
+            let [mut a, mut b] = spans(split, x, y);
             let slot = &split.slot[..];
             threads.join(
                 sharing,
@@ -371,7 +211,7 @@ impl Factor {
         top.y.clear();
         top.y
             .extend(split.top_rows.iter().map(|&r| all.y[r as usize]));
-        let (mut a, mut b) = split.spans(x, y);
+        let [mut a, mut b] = spans(split, x, y);
         let (slot, top) = (&split.slot[..], &*top);
         threads.join(
             sharing,

@@ -16,6 +16,7 @@
 //!   only the packing maintains.
 
 pub(crate) mod cholesky;
+pub(crate) mod etree;
 pub(crate) mod integrators;
 pub(crate) mod kernels;
 pub mod method;
