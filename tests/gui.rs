@@ -642,10 +642,13 @@ fn every_control_works_under_real_input_and_the_log_stays_quiet() {
     let x_last = positions(&s.status()).last().unwrap().0;
     s.move_to(x_last, 0.08);
     s.x(&["mousedown", "3"]);
-    let st = s.expect("pulled up by the attraction", |st| {
-        st["attracting"] == true && positions(st).last().unwrap().1 > 0.03
+    // (The status may be written between the press and the solver's sync of that frame, so
+    // the external force is waited for with the rise, not asserted after it.)
+    s.expect("pulled up by the attraction", |st| {
+        st["attracting"] == true
+            && st["external_force"] == true
+            && positions(st).last().unwrap().1 > 0.03
     });
-    assert_eq!(st["external_force"], true);
     s.x(&["mouseup", "3"]);
     s.expect("attraction released", |st| {
         st["attracting"] == false && st["external_force"] == false

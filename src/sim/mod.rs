@@ -12,6 +12,7 @@ pub mod grid;
 pub mod inputs;
 pub mod params;
 pub mod profile;
+pub mod pull;
 pub mod schedule;
 pub mod solver;
 pub mod stability;
@@ -24,6 +25,7 @@ pub use crate::solver::SolveStats;
 pub use components::*;
 pub use params::*;
 pub use profile::PassTimes;
+pub use pull::Attraction;
 pub use schedule::{
     ParticleSweep, PhysicsStep, PhysicsSystems, SimPlugin, StepBudget, StepSystems, advance, pack,
 };

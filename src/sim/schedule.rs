@@ -181,6 +181,7 @@ impl Plugin for SimPlugin {
             .init_resource::<PassCounts>()
             .init_resource::<Tearing>()
             .init_resource::<Solver>()
+            .init_resource::<super::pull::Attraction>()
             .init_resource::<TickPlan>()
             .init_resource::<ParticleSweep>()
             .init_resource::<StepBudget>()
@@ -248,6 +249,8 @@ impl Plugin for SimPlugin {
                 )
                 .add_systems((
                     (
+                        // The pull toward a point first: it sets external forces.
+                        super::pull::pull,
                         // Body and spring forces in one parallel region, or the body forces
                         // alone when no spring force is read.
                         forces.run_if(scene_has_springs.and_then(integrator_reads_spring_forces)),

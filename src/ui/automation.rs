@@ -3,9 +3,9 @@
 
 use super::controls::HelpOverlay;
 use super::history::History;
-use super::pointer::Attraction;
 use super::stats::LiveStats;
 use super::view::CanvasView;
+use crate::sim::Attraction;
 use crate::sim::{Particle, Pinned, SimClock, SimParams, Solver, Tearing};
 use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;

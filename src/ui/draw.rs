@@ -5,8 +5,9 @@
 //! ~400 ms a frame at 64×64; see the README's performance section.)
 //! Positions are f64 in the simulation; f32 only here.
 
-use super::pointer::{Attraction, Gesture};
+use super::pointer::Gesture;
 use super::view::CanvasView;
+use crate::sim::Attraction;
 use crate::sim::{SimParams, Solver, SolverIndex};
 use bevy::asset::RenderAssetUsages;
 use bevy::camera::visibility::NoFrustumCulling;

@@ -48,7 +48,6 @@ impl Plugin for AppPlugin {
             .init_resource::<pick::Picking>()
             .init_resource::<pointer::Gesture>()
             .init_resource::<events::PressedAt>()
-            .init_resource::<pointer::Attraction>()
             .init_resource::<controls::HelpOverlay>()
             .init_resource::<plots::Timeline>()
             .init_resource::<crate::sim::watch::EnergyWatch>()

@@ -42,28 +42,6 @@ pub enum Gesture {
     },
 }
 
-/// The right button's pull: particles within `radius` of the cursor feel
-/// f = m · `strength` · (cursor − x) / radius, toward the cursor.
-#[derive(Resource, Debug, Clone, Copy, PartialEq)]
-pub struct Attraction {
-    /// m.
-    pub radius: f64,
-    /// m/s² at the rim.
-    pub strength: f64,
-    /// Where it pulls, while the button is held.
-    pub active_at: Option<DVec2>,
-}
-
-impl Default for Attraction {
-    fn default() -> Self {
-        Attraction {
-            radius: 0.12,
-            strength: 200.0,
-            active_at: None,
-        }
-    }
-}
-
 /// The cursor in window and world coordinates, and whether it may start a gesture (on the
 /// canvas, not over a panel or window of egui's).
 #[derive(SystemParam)]
@@ -234,27 +212,18 @@ pub fn drag(
     }
 }
 
-/// Right button held: pull the particles near the cursor toward it, through their
-/// [`ExternalForce`], which every integrator adds at every force evaluation.
+/// Right button held: pull the particles near the cursor toward it ([`Attraction`]: the
+/// simulation evaluates the pull every step, through the external forces that every
+/// integrator reads).
 pub fn attract(
     buttons: Res<ButtonInput<MouseButton>>,
     cursor: Cursor,
     mut attraction: ResMut<Attraction>,
-    mut particles: Query<(&Position, &Mass, &mut ExternalForce), With<Particle>>,
 ) {
     let started = buttons.just_pressed(MouseButton::Right) && cursor.on_canvas().is_some();
     let held = buttons.pressed(MouseButton::Right) && (started || attraction.active_at.is_some());
     let at = held.then(|| cursor.world()).flatten();
-    if at.is_none() && attraction.active_at.is_none() {
-        return;
-    }
-    attraction.active_at = at;
-    let (radius, strength) = (attraction.radius, attraction.strength);
-    for (pos, mass, mut external) in &mut particles {
-        let f = match at {
-            Some(c) if pos.0.distance(c) < radius => (c - pos.0) * (mass.0 * strength / radius),
-            _ => DVec2::ZERO,
-        };
-        external.set_if_neq(ExternalForce(f));
+    if attraction.active_at != at {
+        attraction.active_at = at;
     }
 }
