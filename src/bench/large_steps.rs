@@ -12,6 +12,7 @@
 //! Error: the largest distance of any particle from the reference over 10 checkpoints.
 
 use super::equilibrium::equilibrium;
+use super::median;
 use super::trajectory::{self, Trajectory, max_position_error};
 use super::work_precision::{Row, UNSTABLE_ERROR, fmt_time, table_header};
 use crate::scene::{LoadedScene, Scene, presets};
@@ -297,11 +298,6 @@ fn target_runs(
 
 /// Rounds of the targets' runs.
 const TARGET_ROUNDS: usize = 3;
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
 
 /// Each method settled for 10 s at dt = 1/60 s, against the equilibrium found by minimising
 /// the potential from the best settled shape.

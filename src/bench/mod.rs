@@ -10,6 +10,12 @@ pub mod traffic;
 pub mod trajectory;
 pub mod work_precision;
 
+/// The median of repeated measurements (the upper middle one of an even count).
+pub fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
 /// The machine a figure was measured on: the CPU model with its family and model numbers and
 /// its widest vector extension (the AVX-512 machines and the AVX2 ones differ), and the cores
 /// this process may use (from /proc/cpuinfo; "unknown CPU" elsewhere).

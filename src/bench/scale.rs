@@ -124,10 +124,7 @@ pub fn run(
         let rates: Vec<(usize, f64)> = threads
             .iter()
             .zip(runs)
-            .map(|(&t, mut r)| {
-                r.sort_by(f64::total_cmp);
-                (t, r[r.len() / 2])
-            })
+            .map(|(&t, r)| (t, super::median(r)))
             .collect();
         // The peak of the load and the steps together, with the scene still held as `hooke run`
         // holds it.
