@@ -1,5 +1,6 @@
 //! The pull toward a point ([`Attraction`]), the app's right button: evaluated every step, on
-//! top of the particles' own external forces, and gone without a trace when released.
+//! top of the particles' own external forces (changed or not while it pulls), and gone without
+//! a trace when released.
 
 mod common;
 use bevy::math::DVec2;
@@ -68,5 +69,24 @@ fn the_pull_draws_particles_in_reach_every_step_and_leaves_their_own_forces() {
             "{integrator}"
         );
         assert_eq!(solver(&app).external_force(1), DVec2::ZERO, "{integrator}");
+        // A force of its own changed while the pull is on is the one given back.
+        app.world_mut().resource_mut::<Attraction>().active_at = Some(pos(&app, 0));
+        step(&mut app, 1);
+        let mut own = app
+            .world_mut()
+            .query::<(&SolverIndex, &mut ExternalForce)>();
+        for (i, mut f) in own.iter_mut(app.world_mut()) {
+            if i.0 == 0 {
+                f.0 = DVec2::new(0.0, 0.5);
+            }
+        }
+        step(&mut app, 1);
+        app.world_mut().resource_mut::<Attraction>().active_at = None;
+        step(&mut app, 1);
+        assert_eq!(
+            solver(&app).external_force(0),
+            DVec2::new(0.0, 0.5),
+            "{integrator}"
+        );
     }
 }
