@@ -74,9 +74,36 @@ use bevy::prelude::*;
 
 /// A headless Bevy app with the simulation and nothing else (no window, no GPU), stepped with
 /// [`sim::advance`] or `app.update()`.
+///
+/// Its schedules run single-threaded: the simulation's systems run one after the other anyway
+/// (the step spreads its own work over the solver's threads), and the multi-threaded executor
+/// only woke Bevy's task pool threads on every run, which took 15 % of a 64² XPBD run at
+/// dt = 1/60 and competed with the solver's threads for the cores. An app with systems of its
+/// own to run in parallel can set its executors back.
 pub fn headless_app() -> App {
+    use bevy::app::{FixedFirst, FixedLast, FixedPostUpdate, FixedPreUpdate};
+    use bevy::ecs::schedule::{ScheduleLabel, SingleThreadedExecutor};
     let mut app = App::new();
     app.add_plugins((MinimalPlugins, SimPlugin));
+    let schedules = [
+        First.intern(),
+        PreUpdate.intern(),
+        Update.intern(),
+        PostUpdate.intern(),
+        Last.intern(),
+        FixedFirst.intern(),
+        FixedPreUpdate.intern(),
+        FixedUpdate.intern(),
+        FixedPostUpdate.intern(),
+        FixedLast.intern(),
+    ];
+    for label in schedules {
+        app.edit_schedule(label, |s| {
+            // `new`, not `default`: the default executor never applies the systems' commands
+            // at the schedule's end.
+            s.set_executor(SingleThreadedExecutor::new());
+        });
+    }
     app
 }
 

@@ -232,7 +232,7 @@ impl Plugin for SimPlugin {
         app.init_schedule(PhysicsStep);
         app.edit_schedule(PhysicsStep, |schedule| {
             schedule
-                .set_executor(SingleThreadedExecutor::default())
+                .set_executor(SingleThreadedExecutor::new())
                 .set_build_settings(ScheduleBuildSettings {
                     ambiguity_detection: LogLevel::Error,
                     ..default()
