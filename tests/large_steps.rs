@@ -300,10 +300,11 @@ fn projective_dynamics_refactors_only_when_the_matrix_changes() {
 }
 
 /// XPBD colours its constraints so that a colour's projections are independent: two threads
-/// give one thread's result bit for bit on a cloth big enough to be split.
+/// (a team that meets after each colour) give one thread's result bit for bit on a cloth big
+/// enough to be split, with one sweep a substep and with several (the multipliers' path).
 #[test]
 fn xpbd_on_two_threads_equals_one_bit_for_bit() {
-    let cloth = |threads| {
+    let cloth = |threads, xpbd_sweeps| {
         let loaded = hooke::scene::presets::resolve("assets/scenes/bench/cloth256.ron").unwrap();
         let mut scene = loaded.scene.clone();
         scene.integrator = Integrator::Xpbd;
@@ -314,14 +315,18 @@ fn xpbd_on_two_threads_equals_one_bit_for_bit() {
             &mut app,
             Iterations {
                 xpbd_substeps: 2,
+                xpbd_sweeps,
                 ..Default::default()
             },
         );
         common::step(&mut app, 3);
         solver(&app).x().to_vec()
     };
-    let (one, two) = (cloth(1), cloth(2));
-    assert!(one.iter().zip(&two).all(|(a, b)| a == b));
+    for sweeps in [1, 3] {
+        let (one, two) = (cloth(1, sweeps), cloth(2, sweeps));
+        assert!(one.iter().zip(&two).all(|(a, b)| a == b), "{sweeps} sweeps");
+        assert_ne!(one, cloth(1, 1 + sweeps), "the sweeps count");
+    }
 }
 
 /// Degenerate scenes step under every integrator without a panic or a NaN: nothing at all, one

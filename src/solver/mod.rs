@@ -10,10 +10,10 @@
 //! * [`method`]: the integrators and their iteration counts.
 //! * [`step`]: the passes of one step, and the methods' buffers ([`Workspace`]).
 //! * [`stability`]: how close a scene is to its integrator's limit.
-//! * The machinery, private to the crate: the scalar and AVX kernels, the thread splits, the
-//!   stiffness blocks, the integrators' updates, projective dynamics' factor and XPBD's
-//!   colouring. They hold invariants (array lengths, index order, thread-part boundaries) that
-//!   only the packing maintains.
+//! * The machinery, private to the crate: the scalar and AVX kernels, the thread splits and
+//!   teams, the stiffness blocks, the integrators' updates, projective dynamics' factor and
+//!   XPBD's colouring. They hold invariants (array lengths, index order, thread-part
+//!   boundaries) that only the packing maintains.
 
 pub(crate) mod cholesky;
 pub(crate) mod etree;
@@ -27,6 +27,7 @@ pub mod stability;
 pub mod state;
 pub mod step;
 pub(crate) mod stiffness;
+pub(crate) mod team;
 pub(crate) mod wide;
 pub(crate) mod xpbd;
 

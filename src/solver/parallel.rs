@@ -9,6 +9,7 @@
 
 use super::kernels;
 use super::state::PackedSpring;
+use super::team::{Barrier, Team};
 use glam::DVec2;
 use rayon::prelude::*;
 use std::ops::Range;
@@ -97,6 +98,23 @@ impl Threads {
         match self.pool.as_deref() {
             Some(pool) if sharing => pool.install(|| rayon::join(a, b)),
             _ => (a(), b()),
+        }
+    }
+
+    /// Runs `work` on every thread of the pool at once, as one [`Team`] whose members meet at
+    /// [`Team::wait`], when a scene of `springs` springs is worth sharing; else once, on the
+    /// calling thread, as a team of one. For a step made of many passes too short to pay for a
+    /// fork and a join each (XPBD's colours).
+    pub fn team(&self, springs: usize, work: impl Fn(&Team) + Sync) {
+        match self.pool_for(springs) {
+            Some(pool) => {
+                let barrier = Barrier::new(pool.current_num_threads());
+                pool.broadcast(|ctx| {
+                    let _poison = barrier.guard();
+                    work(&Team::member(ctx.index(), ctx.num_threads(), &barrier));
+                });
+            }
+            None => work(&Team::member(0, 1, &Barrier::new(1))),
         }
     }
 

@@ -60,34 +60,81 @@ pub unsafe fn for_each_spring_force(
 #[inline(always)]
 unsafe fn four_differences(x: &[DVec2], s: &[PackedSpring]) -> (__m256d, __m256d, __m256d) {
     let (s0, s1, s2, s3) = (&s[0], &s[1], &s[2], &s[3]);
-    let (a0, b0, a1, b1) = (
+    let a = [
         x[s0.a as usize],
-        x[s0.b as usize],
         x[s1.a as usize],
-        x[s1.b as usize],
-    );
-    let (a2, b2, a3, b3) = (
         x[s2.a as usize],
-        x[s2.b as usize],
         x[s3.a as usize],
+    ];
+    let b = [
+        x[s0.b as usize],
+        x[s1.b as usize],
+        x[s2.b as usize],
         x[s3.b as usize],
-    );
+    ];
     // SAFETY: the caller guarantees AVX.
-    unsafe {
-        let d01 = _mm256_sub_pd(
-            _mm256_set_pd(a1.y, a1.x, a0.y, a0.x),
-            _mm256_set_pd(b1.y, b1.x, b0.y, b0.x),
-        );
-        let d23 = _mm256_sub_pd(
-            _mm256_set_pd(a3.y, a3.x, a2.y, a2.x),
-            _mm256_set_pd(b3.y, b3.x, b2.y, b2.x),
-        );
-        let l = _mm256_sqrt_pd(_mm256_hadd_pd(
-            _mm256_mul_pd(d01, d01),
-            _mm256_mul_pd(d23, d23),
-        ));
-        (d01, d23, l)
+    let q = unsafe { Quad::of(a, b) };
+    (q.d01, q.d23, q.l)
+}
+
+/// Four springs' ends in registers, two points to a register ([p0, p1] as x0, y0, x1, y1),
+/// with d = a − b and √(d·d) in the lane order [0, 2, 1, 3]: what the force pass, the
+/// projective local step and the XPBD sweep all start from.
+pub(super) struct Quad {
+    pub a01: __m256d,
+    pub a23: __m256d,
+    pub b01: __m256d,
+    pub b23: __m256d,
+    pub d01: __m256d,
+    pub d23: __m256d,
+    pub l: __m256d,
+}
+
+impl Quad {
+    /// # Safety
+    /// The CPU must support AVX ([`available`]); always inlined, it inherits AVX from its
+    /// caller.
+    #[inline(always)]
+    pub(super) unsafe fn of(a: [DVec2; 4], b: [DVec2; 4]) -> Quad {
+        // SAFETY: the caller guarantees AVX.
+        unsafe {
+            // No closure here: closures do not inherit AVX.
+            let a01 = _mm256_set_pd(a[1].y, a[1].x, a[0].y, a[0].x);
+            let a23 = _mm256_set_pd(a[3].y, a[3].x, a[2].y, a[2].x);
+            let b01 = _mm256_set_pd(b[1].y, b[1].x, b[0].y, b[0].x);
+            let b23 = _mm256_set_pd(b[3].y, b[3].x, b[2].y, b[2].x);
+            let d01 = _mm256_sub_pd(a01, b01);
+            let d23 = _mm256_sub_pd(a23, b23);
+            let l = _mm256_sqrt_pd(_mm256_hadd_pd(
+                _mm256_mul_pd(d01, d01),
+                _mm256_mul_pd(d23, d23),
+            ));
+            Quad {
+                a01,
+                a23,
+                b01,
+                b23,
+                d01,
+                d23,
+                l,
+            }
+        }
     }
+}
+
+/// Four per-spring numbers in [`Quad`]'s lane order [0, 2, 1, 3].
+///
+/// # Safety
+/// The CPU must support AVX ([`available`]); always inlined, it inherits AVX from its caller.
+#[inline(always)]
+pub(super) unsafe fn lanes(v: [f64; 4]) -> __m256d {
+    // SAFETY: the caller guarantees AVX. `_mm256_set_pd` takes the lanes high to low.
+    unsafe { _mm256_set_pd(v[3], v[1], v[2], v[0]) }
+}
+
+/// A mask in [`Quad`]'s lane order [0, 2, 1, 3] (bit i for lane i) in spring order.
+pub(super) fn spring_order(mask: i32) -> i32 {
+    (mask & 0b1001) | ((mask & 0b0010) << 1) | ((mask & 0b0100) >> 1)
 }
 
 /// Writes the forces on the a ends of four springs to `out` (x0, y0, x1, y1, ...) and returns a
@@ -105,9 +152,8 @@ unsafe fn four_forces(x: &[DVec2], s: &[PackedSpring], out: &mut [f64; 8]) -> i3
     unsafe {
         let (s0, s1, s2, s3) = (&s[0], &s[1], &s[2], &s[3]);
         let (d01, d23, l) = four_differences(x, s);
-        // _mm256_set_pd takes the lanes high to low: these are in l's order [0, 2, 1, 3].
-        let neg_k = _mm256_set_pd(-s3.k, -s1.k, -s2.k, -s0.k);
-        let rest = _mm256_set_pd(s3.rest, s1.rest, s2.rest, s0.rest);
+        let neg_k = lanes([-s0.k, -s1.k, -s2.k, -s3.k]);
+        let rest = lanes([s0.rest, s1.rest, s2.rest, s3.rest]);
         let c = _mm256_div_pd(_mm256_mul_pd(neg_k, _mm256_sub_pd(l, rest)), l);
         // Each coefficient twice, back in spring order: [c0, c0, c1, c1] and [c2, c2, c3, c3].
         let f01 = _mm256_mul_pd(d01, _mm256_unpacklo_pd(c, c));
@@ -119,8 +165,7 @@ unsafe fn four_forces(x: &[DVec2], s: &[PackedSpring], out: &mut [f64; 8]) -> i3
             l,
             _mm256_set1_pd(MIN_SPRING_LENGTH),
         ));
-        // Lane order [0, 2, 1, 3] back to spring order: swap bits 1 and 2.
-        (short & 0b1001) | ((short & 0b0010) << 1) | ((short & 0b0100) >> 1)
+        spring_order(short)
     }
 }
 
@@ -169,11 +214,11 @@ unsafe fn four_projections(x: &[DVec2], s: &[PackedSpring], h2: f64, out: &mut [
     unsafe {
         let (s0, s1, s2, s3) = (&s[0], &s[1], &s[2], &s[3]);
         let (d01, d23, l) = four_differences(x, s);
-        let rest = _mm256_set_pd(s3.rest, s1.rest, s2.rest, s0.rest);
+        let rest = lanes([s0.rest, s1.rest, s2.rest, s3.rest]);
         // L / |l| where |l| > 0, else 1 (NaN compares false): d = l · 1 = l exactly.
         let positive = _mm256_cmp_pd::<_CMP_GT_OQ>(l, _mm256_setzero_pd());
         let q = _mm256_blendv_pd(_mm256_set1_pd(1.0), _mm256_div_pd(rest, l), positive);
-        let hk = _mm256_set_pd(h2 * s3.k, h2 * s1.k, h2 * s2.k, h2 * s0.k);
+        let hk = lanes([h2 * s0.k, h2 * s1.k, h2 * s2.k, h2 * s3.k]);
         let c01 = _mm256_mul_pd(
             _mm256_mul_pd(d01, _mm256_unpacklo_pd(q, q)),
             _mm256_unpacklo_pd(hk, hk),

@@ -15,13 +15,16 @@
 //! Verlet and RK4.
 //!
 //! Threads: the constraint graph is coloured greedily (no two springs of a colour share a
-//! particle), and a colour's springs are projected in parallel chunks. The sweep is then the
+//! particle), and the pool's threads, as one team ([`super::team`]), project each colour's
+//! springs in shares, meeting at a barrier after every colour: at 64² a colour is a few
+//! microseconds of work, too little to pay for a fork and a join. The sweep is then the
 //! same Gauss-Seidel sweep whatever the thread count: the result is bit for bit that of one
 //! thread. (Jacobi with averaging would need no colouring, but it converges more slowly, by a
 //! factor that grows with the number of constraints on a particle.)
 
 use super::parallel::Threads;
 use super::state::State;
+use super::team::Shared;
 use glam::DVec2;
 
 /// A constraint in colour order: the packed spring's ends and rest length, and the projection's
@@ -170,11 +173,11 @@ impl Xpbd {
     }
 }
 
-/// Positions written by the parallel chunks of one colour.
+/// Positions written by the team's members in one colour.
 ///
-/// Within a colour no two constraints share a particle, so the chunks of a colour pass read
-/// and write disjoint sets of positions; the passes of successive colours are separated by the
-/// pool's join. That is the whole safety argument for the raw pointer.
+/// Within a colour no two constraints share a particle, so the members' shares of a colour
+/// read and write disjoint sets of positions; successive colours are separated by the team's
+/// barrier. That is the whole safety argument for the raw pointer.
 #[derive(Clone, Copy)]
 struct Positions {
     ptr: *mut DVec2,
@@ -194,6 +197,16 @@ impl Positions {
         debug_assert!(i < self.len);
         // SAFETY: in bounds (the packed springs' ends are particle indices) and unshared.
         unsafe { *self.ptr.add(i) }
+    }
+    /// Element `i`'s two coordinates, for a vector store.
+    ///
+    /// # Safety
+    /// As for [`Positions::get`].
+    #[inline(always)]
+    unsafe fn at(self, i: usize) -> *mut f64 {
+        debug_assert!(i < self.len);
+        // SAFETY: as above; a `DVec2` is two f64, x then y.
+        unsafe { self.ptr.add(i).cast() }
     }
     /// # Safety
     /// As for [`Positions::get`].
@@ -260,50 +273,117 @@ fn project_scalar(constraints: &[Constraint], x: Positions) {
 /// gathering their ends first and scattering after is the scalar order's result. The
 /// operations are the scalar ones in the same order (l = x_a − x_b, |l| = √(l_x² + l_y²),
 /// s = (L − |l|)/|l|, x_a + l·(c_a s), x_b − l·(c_b s)), each correctly rounded: bit for bit.
+/// The ends stay in registers from gather to scatter (staging them through arrays cost a
+/// store-to-load stall per register).
 ///
 /// # Safety
 /// The CPU must support AVX, and no other thread may touch these constraints' particles.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]
 unsafe fn project_avx(constraints: &[Constraint], x: Positions) {
-    use std::arch::x86_64::*;
-    let quads = constraints.chunks_exact(4);
+    // Two quads at a time, both computed before either is stored: each waits on its square
+    // root and division, and written one after the other the second's did not overlap the
+    // first's.
+    let mut octs = constraints.chunks_exact(8);
+    for o in &mut octs {
+        // SAFETY: AVX is this function's; the colour's particles are this thread's (see
+        // `Positions`), and within a colour the eight share no particle.
+        unsafe {
+            let (q0, q1) = o.split_at(4);
+            let (m0, m1) = (Moved::of(q0, x), Moved::of(q1, x));
+            m0.store(q0, x);
+            m1.store(q1, x);
+        }
+    }
+    let rest = octs.remainder();
+    let quads = rest.chunks_exact(4);
     let tail = quads.remainder();
     for q in quads {
-        let (mut ax, mut ay, mut bx, mut by) = ([0.0; 4], [0.0; 4], [0.0; 4], [0.0; 4]);
-        let (mut rest, mut ca, mut cb) = ([0.0; 4], [0.0; 4], [0.0; 4]);
-        for k in 0..4 {
-            // SAFETY: the colour's particles are this thread's (see `Positions`).
-            let (pa, pb) = unsafe { (x.get(q[k].a as usize), x.get(q[k].b as usize)) };
-            (ax[k], ay[k], bx[k], by[k]) = (pa.x, pa.y, pb.x, pb.y);
-            (rest[k], ca[k], cb[k]) = (q[k].rest, q[k].ca, q[k].cb);
-        }
-        let load = |v: &[f64; 4]| unsafe { _mm256_loadu_pd(v.as_ptr()) };
-        let (vax, vay, vbx, vby) = (load(&ax), load(&ay), load(&bx), load(&by));
-        let lx = _mm256_sub_pd(vax, vbx);
-        let ly = _mm256_sub_pd(vay, vby);
-        let len = _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(lx, lx), _mm256_mul_pd(ly, ly)));
-        let s = _mm256_div_pd(_mm256_sub_pd(load(&rest), len), len);
-        let (sa, sb) = (_mm256_mul_pd(load(&ca), s), _mm256_mul_pd(load(&cb), s));
-        let store =
-            |v: __m256d, out: &mut [f64; 4]| unsafe { _mm256_storeu_pd(out.as_mut_ptr(), v) };
-        let mut lens = [0.0; 4];
-        store(len, &mut lens);
-        store(_mm256_add_pd(vax, _mm256_mul_pd(lx, sa)), &mut ax);
-        store(_mm256_add_pd(vay, _mm256_mul_pd(ly, sa)), &mut ay);
-        store(_mm256_sub_pd(vbx, _mm256_mul_pd(lx, sb)), &mut bx);
-        store(_mm256_sub_pd(vby, _mm256_mul_pd(ly, sb)), &mut by);
-        for k in 0..4 {
-            if lens[k] != 0.0 {
-                // SAFETY: as above.
-                unsafe {
-                    x.set(q[k].a as usize, DVec2::new(ax[k], ay[k]));
-                    x.set(q[k].b as usize, DVec2::new(bx[k], by[k]));
-                }
+        // SAFETY: as above.
+        unsafe { Moved::of(q, x).store(q, x) };
+    }
+    project_scalar(tail, x);
+}
+
+/// Four constraints' projected ends, two to a register (see [`super::wide::Quad`]), and which
+/// of them have no length and stay.
+#[cfg(target_arch = "x86_64")]
+struct Moved {
+    a01: std::arch::x86_64::__m256d,
+    a23: std::arch::x86_64::__m256d,
+    b01: std::arch::x86_64::__m256d,
+    b23: std::arch::x86_64::__m256d,
+    still: i32,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Moved {
+    /// Written out, not with `array::map`: closures do not inherit AVX, and were not inlined.
+    ///
+    /// # Safety
+    /// AVX, and the particles of `c` (four constraints) are the caller's alone; always
+    /// inlined, it inherits AVX from its caller.
+    #[inline(always)]
+    unsafe fn of(c: &[Constraint], x: Positions) -> Moved {
+        use super::wide::{Quad, lanes, spring_order};
+        use std::arch::x86_64::*;
+        // SAFETY: the caller's.
+        unsafe {
+            let (a, b) = (c[0].a as usize, c[0].b as usize);
+            let (a0, b0) = (x.get(a), x.get(b));
+            let (a, b) = (c[1].a as usize, c[1].b as usize);
+            let (a1, b1) = (x.get(a), x.get(b));
+            let (a, b) = (c[2].a as usize, c[2].b as usize);
+            let (a2, b2) = (x.get(a), x.get(b));
+            let (a, b) = (c[3].a as usize, c[3].b as usize);
+            let (a3, b3) = (x.get(a), x.get(b));
+            let v = Quad::of([a0, a1, a2, a3], [b0, b1, b2, b3]);
+            let rest = lanes([c[0].rest, c[1].rest, c[2].rest, c[3].rest]);
+            let s = _mm256_div_pd(_mm256_sub_pd(rest, v.l), v.l);
+            let sa = _mm256_mul_pd(lanes([c[0].ca, c[1].ca, c[2].ca, c[3].ca]), s);
+            let sb = _mm256_mul_pd(lanes([c[0].cb, c[1].cb, c[2].cb, c[3].cb]), s);
+            // s is in the lane order [0, 2, 1, 3]: unpacklo gives [s0, s0, s1, s1].
+            Moved {
+                a01: _mm256_add_pd(v.a01, _mm256_mul_pd(v.d01, _mm256_unpacklo_pd(sa, sa))),
+                a23: _mm256_add_pd(v.a23, _mm256_mul_pd(v.d23, _mm256_unpackhi_pd(sa, sa))),
+                b01: _mm256_sub_pd(v.b01, _mm256_mul_pd(v.d01, _mm256_unpacklo_pd(sb, sb))),
+                b23: _mm256_sub_pd(v.b23, _mm256_mul_pd(v.d23, _mm256_unpackhi_pd(sb, sb))),
+                still: spring_order(_mm256_movemask_pd(_mm256_cmp_pd::<_CMP_EQ_OQ>(
+                    v.l,
+                    _mm256_setzero_pd(),
+                ))),
             }
         }
     }
-    project_scalar(tail, x);
+
+    /// Writes the ends back; a spring of no length has no direction, and its ends stay.
+    ///
+    /// # Safety
+    /// As for [`Moved::of`].
+    #[inline(always)]
+    unsafe fn store(&self, c: &[Constraint], x: Positions) {
+        use std::arch::x86_64::*;
+        // SAFETY: the caller's.
+        unsafe {
+            let (a01, a23, b01, b23) = (self.a01, self.a23, self.b01, self.b23);
+            if self.still & 1 == 0 {
+                _mm_storeu_pd(x.at(c[0].a as usize), _mm256_castpd256_pd128(a01));
+                _mm_storeu_pd(x.at(c[0].b as usize), _mm256_castpd256_pd128(b01));
+            }
+            if self.still & 2 == 0 {
+                _mm_storeu_pd(x.at(c[1].a as usize), _mm256_extractf128_pd::<1>(a01));
+                _mm_storeu_pd(x.at(c[1].b as usize), _mm256_extractf128_pd::<1>(b01));
+            }
+            if self.still & 4 == 0 {
+                _mm_storeu_pd(x.at(c[2].a as usize), _mm256_castpd256_pd128(a23));
+                _mm_storeu_pd(x.at(c[2].b as usize), _mm256_castpd256_pd128(b23));
+            }
+            if self.still & 8 == 0 {
+                _mm_storeu_pd(x.at(c[3].a as usize), _mm256_extractf128_pd::<1>(a23));
+                _mm_storeu_pd(x.at(c[3].b as usize), _mm256_extractf128_pd::<1>(b23));
+            }
+        }
+    }
 }
 
 /// More than one sweep a substep: λ accumulates over the sweeps.
@@ -346,50 +426,69 @@ pub fn step(
     let inv_hs = 1.0 / hs;
     let floor = ground.unwrap_or(f64::NEG_INFINITY);
     xp.prepare(s, hs);
-    for substep in 0..substeps {
-        // The prediction, v += hₛ f/m, p = x, x += hₛ v; after the first substep fused with the
-        // previous one's velocity, v = (x − p)/hₛ.
-        let previous = substep > 0;
-        let data = (
-            &mut xp.x[..],
-            &mut xp.prev[..],
-            &mut s.v[..],
-            &s.f[..],
-            &s.inv_mass[..],
-        );
-        threads.each(springs, data, |(x, prev, v, f, w)| {
-            for i in 0..x.len() {
-                let end = x[i];
-                if previous && w[i] != 0.0 {
-                    v[i] = (end - prev[i]) * inv_hs;
+    // The pool's threads run the substeps together as one team (a fork and a join per colour
+    // cost as much as a colour's work at 64²). Between two barriers the members write
+    // disjoint elements: their own particles in the prediction, their own constraints'
+    // particles and multipliers in a colour (a colour's constraints share no particle).
+    let (x, prev, v) = (
+        Shared::new(&mut xp.x),
+        Shared::new(&mut xp.prev),
+        Shared::new(&mut s.v),
+    );
+    let multipliers = Shared::new(&mut xp.multipliers);
+    let positions = Positions {
+        ptr: xp.x.as_mut_ptr(),
+        len: n,
+    };
+    let (f, w) = (&s.f[..], &s.inv_mass[..]);
+    let (constraints, colour_starts) = (&xp.constraints[..], &xp.colour_starts[..]);
+    threads.team(springs, |team| {
+        let mine = team.share(0..n);
+        for substep in 0..substeps {
+            // The prediction, v += hₛ f/m, p = x, x += hₛ v; after the first substep fused
+            // with the previous one's velocity, v = (x − p)/hₛ.
+            let previous = substep > 0;
+            // SAFETY: this member's particles (see above).
+            let (x, prev, v) = unsafe {
+                (
+                    x.part(mine.clone()),
+                    prev.part(mine.clone()),
+                    v.part(mine.clone()),
+                )
+            };
+            let (f, w) = (&f[mine.clone()], &w[mine.clone()]);
+            // Zipped, so that no index is bounds-checked (the checks kept this loop scalar
+            // and cost a fifth of the step).
+            let particles = x.iter_mut().zip(prev.iter_mut()).zip(v.iter_mut());
+            for (((x, prev), v), (f, &w)) in particles.zip(f.iter().zip(w)) {
+                let end = *x;
+                if previous && w != 0.0 {
+                    *v = (end - *prev) * inv_hs;
                 }
-                v[i] += f[i] * (hs * w[i]);
-                prev[i] = end;
-                x[i] = on_ground(end + v[i] * hs, w[i], floor);
+                *v += *f * (hs * w);
+                *prev = end;
+                *x = on_ground(end + *v * hs, w, floor);
             }
-        });
-        let positions = Positions {
-            ptr: xp.x.as_mut_ptr(),
-            len: n,
-        };
-        if sweeps > 1 {
-            xp.multipliers.iter_mut().for_each(|m| m.lambda = 0.0);
-        }
-        for _ in 0..sweeps {
-            for colour in xp.colour_starts.windows(2) {
-                let range = colour[0]..colour[1];
-                let constraints = &xp.constraints[range.clone()];
-                if sweeps > 1 {
-                    let data = (constraints, &mut xp.multipliers[range]);
-                    threads.each(springs, data, |(c, m)| {
-                        project_with_multipliers(c, m, positions)
-                    });
-                } else {
-                    threads.each(springs, constraints, |c| project(c, positions));
+            team.wait();
+            for sweep in 0..sweeps {
+                for colour in colour_starts.windows(2) {
+                    let range = team.share(colour[0]..colour[1]);
+                    let constraints = &constraints[range.clone()];
+                    if sweeps > 1 {
+                        // SAFETY: this member's constraints of the colour (see above).
+                        let m = unsafe { multipliers.part(range) };
+                        if sweep == 0 {
+                            m.iter_mut().for_each(|m| m.lambda = 0.0);
+                        }
+                        project_with_multipliers(constraints, m, positions);
+                    } else {
+                        project(constraints, positions);
+                    }
+                    team.wait();
                 }
             }
         }
-    }
+    });
     // The last substep's velocity, and the drift that carries x0 to the step's end.
     let inv_h = 1.0 / dt;
     let data = (
