@@ -172,7 +172,7 @@ fn despawning_mid_run_leaves_the_rest_untouched() {
     let (mut edited, mut plain) = (pair(), pair());
     step(&mut edited, 777);
     step(&mut plain, 777);
-    let spring = solver(&edited).spring_entities()[0];
+    let spring = solver(&edited).spring_entity_in(edited.world(), 0).unwrap();
     let p1 = solver(&edited).entities()[1];
     edited.world_mut().despawn(spring);
     edited.world_mut().despawn(p1);

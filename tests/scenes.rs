@@ -217,3 +217,53 @@ fn the_spatial_grid_finds_exactly_the_particles_within_the_radius() {
         assert_eq!(found, expected);
     }
 }
+
+/// A big scene's ids are reserved before its spawn, so that Bevy's per-entity metadata grows
+/// once, to the scene plus a sixteenth of room. The 163² cloth has 131,869 entities, just past
+/// 2^17: grown by doubling, the metadata would hold 262,144 records. The scene takes the ids
+/// it reserved (one unbroken run in a fresh world: a batch that took a fresh id past them
+/// would have grown it again), a later spawn takes one from the room, and loading the scene
+/// again over itself (its ids back from the free list) grows nothing.
+#[test]
+fn a_big_scene_grows_the_entity_metadata_once() {
+    use bevy::prelude::*;
+    use hooke::sim::{Particle, Solver, Spring};
+    let w = 163;
+    let loaded = LoadedScene::from_scene(hooke::bench::perf::cloth(w), None)
+        .expect("the bench cloth is valid");
+    let mut app = hooke::headless_app();
+    let world = app.world_mut();
+    let indices = |world: &mut World| {
+        let mut q = world.query_filtered::<Entity, Or<(With<Particle>, With<Spring>)>>();
+        let mut v: Vec<u32> = q.iter(world).map(|e| e.index_u32()).collect();
+        v.sort_unstable();
+        v
+    };
+    let mut grown = 0;
+    for load in 0..2 {
+        load_into_world(world, &loaded);
+        hooke::sim::pack(world).unwrap();
+        let (particles, springs) = {
+            let s = world.resource::<Solver>();
+            (s.particle_count(), s.spring_count())
+        };
+        let count = particles + springs;
+        assert_eq!(count, 131_869);
+        let ids = indices(world);
+        assert_eq!(ids.len(), count);
+        let records = world.entities().len() as usize;
+        assert!(
+            records < count + count / 8,
+            "load {load}: {records} metadata records for {count} entities"
+        );
+        if load == 0 {
+            let (first, last) = (ids[0], *ids.last().unwrap());
+            assert_eq!(last - first + 1, count as u32, "one unbroken run of ids");
+            let later = world.spawn_empty().id().index_u32();
+            assert!(later > last + 1, "a later spawn takes an id from the room");
+            grown = records;
+        } else {
+            assert_eq!(records, grown, "the second load grew the metadata");
+        }
+    }
+}

@@ -2,6 +2,7 @@
 
 use super::format::{ParticleDef, Scene, SpringDef};
 use super::generate::Expanded;
+use super::reserve::Reserved;
 use super::validate::validate;
 use crate::sim::*;
 use bevy::math::DVec2;
@@ -184,15 +185,25 @@ pub fn spawn_expanded(world: &mut World, expanded: &Expanded) -> Vec<Entity> {
     )
 }
 
-/// [`spawn_expanded`] from streams: each kind in one batch, so that the ECS reserves what the
-/// stream's length says, once (a cloth of millions of springs then never doubles a table), and
-/// no list of the whole scene is built first. Pinned particles get [`Pinned`] after their
-/// batch; creation order is the streams' either way.
+/// [`spawn_expanded`] from streams, in batches that the ECS sizes from the streams' lengths,
+/// with ids reserved so that its per-entity storage grows once ([`Reserved`]): a cloth of
+/// millions of springs then never doubles a table, and no list of the whole scene is built
+/// first. The particles are one batch, the springs two (a batch holds at most half of them;
+/// the second doubles the first's table, to exactly their number). Pinned particles get
+/// [`Pinned`] after their batch; creation order is the streams' either way.
 fn spawn_streamed(
     world: &mut World,
     particles: impl Iterator<Item = ParticleDef>,
     springs: impl Iterator<Item = SpringDef>,
 ) -> Vec<Entity> {
+    let exact = |(lower, upper): (usize, Option<usize>)| (upper == Some(lower)).then_some(lower);
+    let counts = exact(particles.size_hint()).zip(exact(springs.size_hint()));
+    let mut reserved = counts.and_then(|(p, s)| Reserved::new(world, p + s));
+    let release = |reserved: &mut Option<Reserved>, world: &mut World, n: usize| {
+        if let Some(r) = reserved {
+            r.release(world, n);
+        }
+    };
     let mut pinned = vec![];
     let bundles = particles.enumerate().map(|(i, p)| {
         if p.pinned {
@@ -210,13 +221,21 @@ fn spawn_streamed(
             Mass(p.mass),
         )
     });
+    release(&mut reserved, world, counts.map_or(0, |c| c.0));
     let entities: Vec<Entity> = world.spawn_batch(bundles).collect();
     for &i in &pinned {
         world.entity_mut(entities[i]).insert(Pinned);
     }
-    world.spawn_batch(
-        springs.map(|s| Spring::new(entities[s.a], entities[s.b], s.rest, s.stiffness)),
-    );
+    let mut springs =
+        springs.map(|s| Spring::new(entities[s.a], entities[s.b], s.rest, s.stiffness));
+    let half = counts.map_or(0, |c| c.1 / 2);
+    release(&mut reserved, world, half);
+    world.spawn_batch(springs.by_ref().take(half));
+    release(&mut reserved, world, usize::MAX);
+    world.spawn_batch(springs);
+    if let Some(r) = reserved {
+        r.finish(world);
+    }
     entities
 }
 

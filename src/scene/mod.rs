@@ -4,6 +4,7 @@ pub mod format;
 pub mod generate;
 pub mod load;
 pub mod presets;
+mod reserve;
 pub mod validate;
 
 pub use format::*;

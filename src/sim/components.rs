@@ -15,15 +15,7 @@ use bevy::ecs::world::DeferredWorld;
 /// is spawned: the solver orders particles by it, so that scene order (CSV rows, summation
 /// order) survives archetype moves such as pinning.
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq, Eq)]
-#[require(
-    Position,
-    Velocity,
-    Mass,
-    Force,
-    ExternalForce,
-    SolverIndex,
-    CreationOrder
-)]
+#[require(Position, Velocity, Mass, ExternalForce, SolverIndex, CreationOrder)]
 #[component(on_add = assign_creation_order)]
 pub struct Particle;
 
@@ -72,7 +64,10 @@ impl Default for Mass {
 }
 
 /// The total force on the particle at the start of the last step (gravity plus springs).
-/// Written back by the solver for inspection; editing it has no effect.
+/// Insert it on the particles whose force you want to read: the solver writes it back at the
+/// end of every tick to the particles that have it. Editing it has no effect. A particle does
+/// not come with one: a cloth of millions of particles would pay 24 bytes each (6 a spring)
+/// for numbers nobody reads.
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
 pub struct Force(pub DVec2);
 

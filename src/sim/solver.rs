@@ -4,7 +4,9 @@
 //! The ECS components stay the source of truth; the crate's sync rebuilds or patches this copy
 //! when entities change, and the step's systems run the core's passes on it.
 
+use super::components::Spring;
 use crate::solver::{SolveStats, State, Workspace};
+use bevy::ecs::entity::{Entities, EntityIndex};
 use bevy::prelude::*;
 use std::ops::{Deref, DerefMut};
 
@@ -33,8 +35,10 @@ pub struct Solver {
     pub(crate) work: Workspace,
     /// Particle entity of each dense index, in creation order.
     pub(crate) entities: Vec<Entity>,
-    /// Spring entity of each packed spring.
-    pub(crate) spring_entities: Vec<Entity>,
+    /// The index of each packed spring's entity, as of the last repack. Four bytes a spring
+    /// rather than an [`Entity`]'s eight (the generation): at millions of springs every byte
+    /// per spring shows in memory. [`Solver::spring_entity`] resolves and checks it.
+    pub(crate) spring_entities: Vec<u32>,
 }
 
 impl Deref for Solver {
@@ -56,9 +60,29 @@ impl Solver {
         &self.entities
     }
 
-    /// Spring entity of each packed spring.
-    pub fn spring_entities(&self) -> &[Entity] {
-        &self.spring_entities
+    /// The entity of packed spring `i`, if it is still the spring packed there: the solver
+    /// keeps only its entity's index, so the entity now at that index is looked up in
+    /// `entities` and its [`Spring`] (through `spring`) must join the packed ends. A spring
+    /// despawned since the last repack, whose index a new entity took, gives `None`.
+    pub fn spring_entity(
+        &self,
+        i: usize,
+        entities: &Entities,
+        spring: impl Fn(Entity) -> Option<Spring>,
+    ) -> Option<Entity> {
+        let index = EntityIndex::from_raw_u32(*self.spring_entities.get(i)?)?;
+        let e = entities.resolve_from_index(index);
+        let (s, packed) = (spring(e)?, self.state.springs[i]);
+        let (a, b) = (
+            self.entities[packed.a as usize],
+            self.entities[packed.b as usize],
+        );
+        (s.a == a && s.b == b).then_some(e)
+    }
+
+    /// [`Solver::spring_entity`] in a world (for headless use and tests).
+    pub fn spring_entity_in(&self, world: &World, i: usize) -> Option<Entity> {
+        self.spring_entity(i, world.entities(), |e| world.get::<Spring>(e).copied())
     }
 
     /// The packed state.
@@ -84,6 +108,6 @@ impl Solver {
         let start = springs.partition_point(|s| (s.a, s.b) < (a, b));
         (start..springs.len())
             .take_while(|&i| (springs[i].a, springs[i].b) == (a, b))
-            .find(|&i| self.spring_entities[i] == e)
+            .find(|&i| self.spring_entities[i] == e.index_u32())
     }
 }

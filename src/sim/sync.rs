@@ -227,10 +227,10 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &Springs) {
                 rest: s.rest,
                 k: s.stiffness,
             });
-            spring_entities.push(e);
+            spring_entities.push(e.index_u32());
         }
     }
-    // Grouped by first end, then second (ties by entity): the spring pass then sums each
+    // Grouped by first end, then second (ties by entity index): the spring pass then sums each
     // particle's run of springs in a register, and repeated second ends lie a few springs
     // apart, so no update waits on the previous one's store (see `solver::spring::Run`).
     sort_springs(&mut packed, &mut spring_entities);
@@ -266,8 +266,8 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &Springs) {
 /// from its sorted position), so an insertion sort of the two arrays in place does it in one
 /// pass with no extra memory. When it has moved more than a few places per spring the input is
 /// not nearly sorted, and a permutation sort finishes the job.
-fn sort_springs(springs: &mut [PackedSpring], entities: &mut [Entity]) {
-    let key = |s: &PackedSpring, e: Entity| (s.a, s.b, e);
+fn sort_springs(springs: &mut [PackedSpring], entities: &mut [u32]) {
+    let key = |s: &PackedSpring, e: u32| (s.a, s.b, e);
     let budget = 8 * springs.len();
     let mut moves = 0;
     for i in 1..springs.len() {
@@ -324,7 +324,15 @@ fn inverse_mass(m: f64, held: bool) -> f64 {
 /// user sees (the status says what happened and when).
 pub fn sync_from_solver(
     mut solver: ResMut<Solver>,
-    mut particles: Query<(&SolverIndex, &mut Position, &mut Velocity, &mut Force), With<Particle>>,
+    mut particles: Query<
+        (
+            &SolverIndex,
+            &mut Position,
+            &mut Velocity,
+            Option<&mut Force>,
+        ),
+        With<Particle>,
+    >,
 ) {
     if solver.non_finite {
         for (index, pos, vel, _) in &particles {
@@ -346,7 +354,9 @@ pub fn sync_from_solver(
         if i < solver.x.len() {
             pos.bypass_change_detection().0 = solver.x[i];
             vel.bypass_change_detection().0 = solver.v[i];
-            force.bypass_change_detection().0 = solver.f[i];
+            if let Some(force) = &mut force {
+                force.bypass_change_detection().0 = solver.f[i];
+            }
         }
     }
 }
@@ -383,17 +393,15 @@ mod tests {
                     }
                 })
                 .collect();
-            let mut entities: Vec<Entity> = (0..n)
-                .map(|i| Entity::from_raw_u32(i + 1).unwrap())
-                .collect();
-            let mut expected: Vec<(PackedSpring, Entity)> = springs
+            let mut entities: Vec<u32> = (0..n).map(|i| 3 * i + 1).collect();
+            let mut expected: Vec<(PackedSpring, u32)> = springs
                 .iter()
                 .copied()
                 .zip(entities.iter().copied())
                 .collect();
             expected.sort_by_key(|(s, e)| (s.a, s.b, *e));
             sort_springs(&mut springs, &mut entities);
-            let got: Vec<(PackedSpring, Entity)> = springs.into_iter().zip(entities).collect();
+            let got: Vec<(PackedSpring, u32)> = springs.into_iter().zip(entities).collect();
             assert_eq!(got, expected, "scrambled: {scrambled}");
         }
     }

@@ -7,8 +7,10 @@
 //! app's undo history records the state before a tear there). Springs of zero rest length have
 //! no strain and never tear. With tearing off neither system runs.
 
+use super::components::Spring;
 use super::params::{PassCounts, SimParams, Tearing};
 use super::solver::Solver;
+use bevy::ecs::entity::Entities;
 use bevy::prelude::*;
 
 /// Run condition: tearing is on.
@@ -24,6 +26,8 @@ pub fn tears_pending(tearing: Res<Tearing>) -> bool {
 /// Lists the springs stretched past the limit.
 pub fn find_torn_springs(
     solver: Res<Solver>,
+    entities: &Entities,
+    springs: Query<&Spring>,
     params: Res<SimParams>,
     mut tearing: ResMut<Tearing>,
     mut n: ResMut<PassCounts>,
@@ -31,11 +35,12 @@ pub fn find_torn_springs(
     let Some(strain) = params.tear else { return };
     let limit = 1.0 + strain;
     let s = &*solver;
-    let torn = s.springs.iter().zip(&s.spring_entities).filter(|(sp, _)| {
+    let torn = s.springs.iter().enumerate().filter(|(_, sp)| {
         let l = (s.x[sp.a as usize] - s.x[sp.b as usize]).length();
         sp.rest > 0.0 && l > limit * sp.rest
     });
-    tearing.pending.extend(torn.map(|(_, &e)| e));
+    let entity = |i| s.spring_entity(i, entities, |e| springs.get(e).ok().copied());
+    tearing.pending.extend(torn.filter_map(|(i, _)| entity(i)));
     n.tear += 1;
 }
 

@@ -14,7 +14,7 @@ use super::pick::Picking;
 use super::view::CanvasView;
 use crate::scene::CurrentScene;
 use crate::sim::*;
-use bevy::ecs::entity::EntityHashSet;
+use bevy::ecs::entity::{Entities, EntityHashSet};
 use bevy::ecs::system::SystemParam;
 use bevy::math::DVec2;
 use bevy::prelude::*;
@@ -151,6 +151,8 @@ pub fn drag(
     time: Res<Time<Real>>,
     params: Res<SimParams>,
     solver: Res<Solver>,
+    entities: &Entities,
+    springs: Query<&Spring>,
     mut picking: ResMut<Picking>,
     mut gesture: ResMut<Gesture>,
     mut particles: Query<(&mut Position, &mut Velocity), With<Particle>>,
@@ -196,7 +198,10 @@ pub fn drag(
                 let crossed: Vec<Entity> = picking
                     .springs_crossing(&solver, *last, at)
                     .into_iter()
-                    .map(|i| solver.spring_entities[i as usize])
+                    .filter_map(|i| {
+                        let spring = |e| springs.get(e).ok().copied();
+                        solver.spring_entity(i as usize, entities, spring)
+                    })
                     .filter(|e| !cut.contains(e))
                     .collect();
                 if !crossed.is_empty() {
