@@ -105,7 +105,7 @@ impl Threads {
     /// [`Team::wait`], when a scene of `springs` springs is worth sharing; else once, on the
     /// calling thread, as a team of one. For a step made of many passes too short to pay for a
     /// fork and a join each (XPBD's colours).
-    pub fn team(&self, springs: usize, work: impl Fn(&Team) + Sync) {
+    pub(crate) fn team(&self, springs: usize, work: impl Fn(&Team) + Sync) {
         match self.pool_for(springs) {
             Some(pool) => {
                 let barrier = Barrier::new(pool.current_num_threads());

@@ -27,11 +27,6 @@ impl<'a> Team<'a> {
         }
     }
 
-    /// How many members the team has.
-    pub fn size(&self) -> usize {
-        self.size
-    }
-
     /// This member's contiguous share of `range`: the members' shares cover it in order,
     /// each within one of the others' lengths.
     pub fn share(&self, range: Range<usize>) -> Range<usize> {
@@ -182,7 +177,7 @@ mod tests {
         let shared = Shared::new(&mut cells);
         let seen = AtomicUsize::new(0);
         threads.team(usize::MAX, |team| {
-            assert_eq!(team.size(), 2);
+            assert_eq!(team.share(0..2).len(), 1, "a team of two");
             let me = team.share(0..2).start;
             let other = 1 - me;
             for round in 1..=1000u64 {
