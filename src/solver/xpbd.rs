@@ -366,21 +366,53 @@ impl Moved {
         // SAFETY: the caller's.
         unsafe {
             let (a01, a23, b01, b23) = (self.a01, self.a23, self.b01, self.b23);
-            if self.still & 1 == 0 {
-                _mm_storeu_pd(x.at(c[0].a as usize), _mm256_castpd256_pd128(a01));
-                _mm_storeu_pd(x.at(c[0].b as usize), _mm256_castpd256_pd128(b01));
-            }
-            if self.still & 2 == 0 {
-                _mm_storeu_pd(x.at(c[1].a as usize), _mm256_extractf128_pd::<1>(a01));
-                _mm_storeu_pd(x.at(c[1].b as usize), _mm256_extractf128_pd::<1>(b01));
-            }
-            if self.still & 4 == 0 {
-                _mm_storeu_pd(x.at(c[2].a as usize), _mm256_castpd256_pd128(a23));
-                _mm_storeu_pd(x.at(c[2].b as usize), _mm256_castpd256_pd128(b23));
-            }
-            if self.still & 8 == 0 {
-                _mm_storeu_pd(x.at(c[3].a as usize), _mm256_extractf128_pd::<1>(a23));
-                _mm_storeu_pd(x.at(c[3].b as usize), _mm256_extractf128_pd::<1>(b23));
+            // Calls, not a closure: closures do not inherit AVX.
+            self.put(
+                c,
+                0,
+                x,
+                _mm256_castpd256_pd128(a01),
+                _mm256_castpd256_pd128(b01),
+            );
+            let (a1, b1) = (
+                _mm256_extractf128_pd::<1>(a01),
+                _mm256_extractf128_pd::<1>(b01),
+            );
+            self.put(c, 1, x, a1, b1);
+            self.put(
+                c,
+                2,
+                x,
+                _mm256_castpd256_pd128(a23),
+                _mm256_castpd256_pd128(b23),
+            );
+            let (a3, b3) = (
+                _mm256_extractf128_pd::<1>(a23),
+                _mm256_extractf128_pd::<1>(b23),
+            );
+            self.put(c, 3, x, a3, b3);
+        }
+    }
+
+    /// Writes constraint `k`'s two ends, unless it has no length.
+    ///
+    /// # Safety
+    /// As for [`Moved::of`].
+    #[inline(always)]
+    unsafe fn put(
+        &self,
+        c: &[Constraint],
+        k: usize,
+        x: Positions,
+        a: std::arch::x86_64::__m128d,
+        b: std::arch::x86_64::__m128d,
+    ) {
+        use std::arch::x86_64::_mm_storeu_pd;
+        if self.still & (1 << k) == 0 {
+            // SAFETY: the caller's.
+            unsafe {
+                _mm_storeu_pd(x.at(c[k].a as usize), a);
+                _mm_storeu_pd(x.at(c[k].b as usize), b);
             }
         }
     }
