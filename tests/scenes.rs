@@ -267,3 +267,38 @@ fn a_big_scene_grows_the_entity_metadata_once() {
         }
     }
 }
+
+/// Scenes of other sizes loaded one over another (ids partly from the free list, partly
+/// fresh) come out whole: every particle and spring, each spring joining the particles it
+/// names, and the solver packs them all.
+#[test]
+fn big_scenes_of_other_sizes_load_over_each_other() {
+    use hooke::sim::{Particle, Solver, Spring};
+    let mut app = hooke::headless_app();
+    let world = app.world_mut();
+    for w in [120, 170, 90, 170] {
+        let loaded = LoadedScene::from_scene(hooke::bench::perf::cloth(w), None).unwrap();
+        load_into_world(world, &loaded);
+        hooke::sim::pack(world).unwrap();
+        let springs = w * (w - 1) * 2 + (w - 1) * (w - 1) * 2;
+        let s = world.resource::<Solver>();
+        assert_eq!(
+            (s.particle_count(), s.spring_count()),
+            (w * w, springs),
+            "cloth{w}"
+        );
+        let particles = world
+            .query_filtered::<(), bevy::prelude::With<Particle>>()
+            .iter(world)
+            .count();
+        assert_eq!(particles, w * w);
+        let mut q = world.query::<&Spring>();
+        let joined = q
+            .iter(world)
+            .all(|s| world.get::<Particle>(s.a).is_some() && world.get::<Particle>(s.b).is_some());
+        assert!(
+            joined,
+            "cloth{w}: a spring names a particle that is not there"
+        );
+    }
+}
