@@ -133,6 +133,43 @@ impl<T> Shared<T> {
         }
     }
 
+    /// Element `i`.
+    ///
+    /// # Safety
+    /// As for [`Shared::part`], for the one element `i` (in bounds: checked in debug builds
+    /// only, for the hot loops that read elements one by one).
+    #[inline(always)]
+    pub unsafe fn get(&self, i: usize) -> T
+    where
+        T: Copy,
+    {
+        debug_assert!(i < self.len);
+        // SAFETY: in bounds and unshared by the caller's promise.
+        unsafe { *self.ptr.add(i) }
+    }
+
+    /// Writes element `i`.
+    ///
+    /// # Safety
+    /// As for [`Shared::get`].
+    #[inline(always)]
+    pub unsafe fn set(&self, i: usize, value: T) {
+        debug_assert!(i < self.len);
+        // SAFETY: as above.
+        unsafe { *self.ptr.add(i) = value }
+    }
+
+    /// Where element `i` is, for a store of its own kind (a vector store of a point).
+    ///
+    /// # Safety
+    /// As for [`Shared::get`].
+    #[inline(always)]
+    pub unsafe fn ptr(&self, i: usize) -> *mut T {
+        debug_assert!(i < self.len);
+        // SAFETY: as above.
+        unsafe { self.ptr.add(i) }
+    }
+
     /// The elements in `range`.
     ///
     /// # Safety
@@ -194,6 +231,7 @@ mod tests {
         assert_eq!(seen.into_inner(), 2, "both members ran");
     }
 }
+
 /// What a barrier and a team's start cost here, printed beside the machine:
 /// `cargo test --release --lib what_a_team_costs -- --ignored --nocapture`.
 #[cfg(test)]

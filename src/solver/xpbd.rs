@@ -177,46 +177,8 @@ impl Xpbd {
 ///
 /// Within a colour no two constraints share a particle, so the members' shares of a colour
 /// read and write disjoint sets of positions; successive colours are separated by the team's
-/// barrier. That is the whole safety argument for the raw pointer.
-#[derive(Clone, Copy)]
-struct Positions {
-    ptr: *mut DVec2,
-    len: usize,
-}
-
-// SAFETY: see the type's docs: concurrent chunks touch disjoint elements.
-unsafe impl Send for Positions {}
-// SAFETY: as above.
-unsafe impl Sync for Positions {}
-
-impl Positions {
-    /// # Safety
-    /// No other thread may access element `i` during the colour pass.
-    #[inline(always)]
-    unsafe fn get(self, i: usize) -> DVec2 {
-        debug_assert!(i < self.len);
-        // SAFETY: in bounds (the packed springs' ends are particle indices) and unshared.
-        unsafe { *self.ptr.add(i) }
-    }
-    /// Element `i`'s two coordinates, for a vector store.
-    ///
-    /// # Safety
-    /// As for [`Positions::get`].
-    #[inline(always)]
-    unsafe fn at(self, i: usize) -> *mut f64 {
-        debug_assert!(i < self.len);
-        // SAFETY: as above; a `DVec2` is two f64, x then y.
-        unsafe { self.ptr.add(i).cast() }
-    }
-    /// # Safety
-    /// As for [`Positions::get`].
-    #[inline(always)]
-    unsafe fn set(self, i: usize, p: DVec2) {
-        debug_assert!(i < self.len);
-        // SAFETY: as above.
-        unsafe { *self.ptr.add(i) = p }
-    }
-}
+/// barrier. That is the whole safety argument for the shared slice.
+type Positions = Shared<DVec2>;
 
 /// The ground as a position constraint of each substep's prediction (as position-based methods
 /// treat contact): a free particle predicted below it is put on it, so the substep's velocity
@@ -411,8 +373,8 @@ impl Moved {
         if self.still & (1 << k) == 0 {
             // SAFETY: the caller's.
             unsafe {
-                _mm_storeu_pd(x.at(c[k].a as usize), a);
-                _mm_storeu_pd(x.at(c[k].b as usize), b);
+                _mm_storeu_pd(x.ptr(c[k].a as usize).cast(), a);
+                _mm_storeu_pd(x.ptr(c[k].b as usize).cast(), b);
             }
         }
     }
@@ -462,16 +424,12 @@ pub fn step(
     // cost as much as a colour's work at 64²). Between two barriers the members write
     // disjoint elements: their own particles in the prediction, their own constraints'
     // particles and multipliers in a colour (a colour's constraints share no particle).
-    let (x, prev, v) = (
+    let (positions, prev, v) = (
         Shared::new(&mut xp.x),
         Shared::new(&mut xp.prev),
         Shared::new(&mut s.v),
     );
     let multipliers = Shared::new(&mut xp.multipliers);
-    let positions = Positions {
-        ptr: xp.x.as_mut_ptr(),
-        len: n,
-    };
     let (f, w) = (&s.f[..], &s.inv_mass[..]);
     let (constraints, colour_starts) = (&xp.constraints[..], &xp.colour_starts[..]);
     threads.team(springs, |team| {
@@ -483,7 +441,7 @@ pub fn step(
             // SAFETY: this member's particles (see above).
             let (x, prev, v) = unsafe {
                 (
-                    x.part(mine.clone()),
+                    positions.part(mine.clone()),
                     prev.part(mine.clone()),
                     v.part(mine.clone()),
                 )
@@ -573,10 +531,7 @@ mod tests {
             })
             .collect();
         let mut scalar = x.clone();
-        let p = |v: &mut Vec<DVec2>| Positions {
-            ptr: v.as_mut_ptr(),
-            len: v.len(),
-        };
+        let p = |v: &mut Vec<DVec2>| Positions::new(v);
         project_scalar(&constraints, p(&mut scalar));
         // SAFETY: AVX checked above; one thread.
         unsafe { project_avx(&constraints, p(&mut x)) };
