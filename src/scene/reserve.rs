@@ -54,14 +54,7 @@ impl Reserved {
         let mut room = vec![];
         if ids.iter().any(|e| e.index_u32() >= records) {
             room = take(world, count / HEADROOM);
-            let top = |v: &[Entity]| (0..v.len()).max_by_key(|&i| v[i].index_u32());
-            let highest = match (top(&ids), top(&room)) {
-                (Some(i), Some(r)) if room[r].index_u32() > ids[i].index_u32() => {
-                    Some(&mut room[r])
-                }
-                (Some(i), _) => Some(&mut ids[i]),
-                (None, r) => r.map(|r| &mut room[r]),
-            };
+            let highest = (ids.iter_mut().chain(&mut room)).max_by_key(|e| e.index_u32());
             // Spawned and despawned without being freed: its id, a generation on, is handed
             // out with the others (a single id freed alone would wait on the local list).
             if let Some(highest) = highest
@@ -83,10 +76,9 @@ impl Reserved {
         self.next = end;
     }
 
-    /// After the last batch: hands back the ids no batch took (were a stream shorter than it
-    /// said) and the room, for whatever is spawned later. Freed last, they fit the free list's
-    /// buffer as the batches left it (freed first, under the batches' ids, they grew it by
-    /// 4 bytes a spring).
+    /// After the last batch: hands back the room (and any ids not released yet), for whatever
+    /// is spawned later. Freed last, it fits the free list's buffer as the batches left it
+    /// (freed first, under the batches' ids, it grew it by 4 bytes a spring).
     pub(super) fn finish(mut self, world: &mut World) {
         self.release(world, usize::MAX);
         world.entity_allocator_mut().free_many(&self.room);

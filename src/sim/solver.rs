@@ -38,7 +38,7 @@ pub struct Solver {
     /// The index of each packed spring's entity, as of the last repack. Four bytes a spring
     /// rather than an [`Entity`]'s eight (the generation): at millions of springs every byte
     /// per spring shows in memory. [`Solver::spring_entity`] resolves and checks it.
-    pub(crate) spring_entities: Vec<u32>,
+    pub(crate) spring_entity_indices: Vec<u32>,
 }
 
 impl Deref for Solver {
@@ -70,7 +70,7 @@ impl Solver {
         entities: &Entities,
         spring: impl Fn(Entity) -> Option<Spring>,
     ) -> Option<Entity> {
-        let index = EntityIndex::from_raw_u32(*self.spring_entities.get(i)?)?;
+        let index = EntityIndex::from_raw_u32(*self.spring_entity_indices.get(i)?)?;
         let e = entities.resolve_from_index(index);
         let (s, packed) = (spring(e)?, self.state.springs[i]);
         let (a, b) = (
@@ -108,6 +108,6 @@ impl Solver {
         let start = springs.partition_point(|s| (s.a, s.b) < (a, b));
         (start..springs.len())
             .take_while(|&i| (springs[i].a, springs[i].b) == (a, b))
-            .find(|&i| self.spring_entities[i] == e.index_u32())
+            .find(|&i| self.spring_entity_indices[i] == e.index_u32())
     }
 }

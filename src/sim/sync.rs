@@ -218,7 +218,7 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &Springs) {
     };
     // Sized once: the query knows its length.
     let m = springs.iter().size_hint().1.unwrap_or(0);
-    let (mut packed, mut spring_entities) = (Vec::with_capacity(m), Vec::with_capacity(m));
+    let (mut packed, mut spring_entity_indices) = (Vec::with_capacity(m), Vec::with_capacity(m));
     for (e, s) in springs {
         if let (Some(a), Some(b)) = (end(s.a), end(s.b)) {
             packed.push(PackedSpring {
@@ -227,13 +227,13 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &Springs) {
                 rest: s.rest,
                 k: s.stiffness,
             });
-            spring_entities.push(e.index_u32());
+            spring_entity_indices.push(e.index_u32());
         }
     }
     // Grouped by first end, then second (ties by entity index): the spring pass then sums each
     // particle's run of springs in a register, and repeated second ends lie a few springs
     // apart, so no update waits on the previous one's store (see `solver::spring::Run`).
-    sort_springs(&mut packed, &mut spring_entities);
+    sort_springs(&mut packed, &mut spring_entity_indices);
 
     let state = State {
         f: vec![DVec2::ZERO; n],
@@ -256,7 +256,7 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &Springs) {
         work: solver.work.repacked(),
         state,
         entities,
-        spring_entities,
+        spring_entity_indices,
     };
 }
 

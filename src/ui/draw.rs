@@ -7,8 +7,7 @@
 
 use super::pointer::Gesture;
 use super::view::CanvasView;
-use crate::sim::Attraction;
-use crate::sim::{SimParams, Solver, SolverIndex};
+use crate::sim::{Attraction, SimParams, Solver, SolverIndex};
 use bevy::asset::RenderAssetUsages;
 use bevy::camera::visibility::NoFrustumCulling;
 use bevy::mesh::{Indices, PrimitiveTopology, VertexAttributeValues};

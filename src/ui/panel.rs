@@ -7,7 +7,6 @@ use super::plots::{self, Timeline};
 use super::stats::LiveStats;
 use super::view::CanvasView;
 use crate::scene::{CurrentScene, load_into_world, presets};
-use crate::sim::Attraction;
 use crate::sim::*;
 use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
