@@ -8,17 +8,25 @@
 //!
 //! A supernode is a run of columns with one shared pattern below its diagonal block, stored as
 //! one dense column-major block. Per supernode, the forward substitution solves the diagonal
-//! block, then sums the block's updates to the rows below in a contiguous buffer four columns
-//! at a time and scatters them once; the back substitution gathers those rows once, takes each
-//! column's dot product with them, and then solves the diagonal block from its last column.
-//! The long loops run over contiguous memory in independent lanes, so the compiler vectorises
-//! them (with AVX where the CPU has it, detected at run time); the diagonal is multiplied by
-//! its reciprocal rather than divided by, which would put a division's latency on every
-//! column's critical path. The lane order is fixed, so the result is the same bits on every
-//! CPU and thread count.
+//! block, then sums the block's updates to the rows below in a contiguous buffer and scatters
+//! them once; the back substitution gathers those rows once, takes each column's dot product
+//! with them, and then solves the diagonal block from its last column ([`super::supernode`]
+//! has the dense kernels, portable and AVX, with the same bits).
+//!
+//! What bounds a solve is memory: the 256² cloth's factor has 3.5 M values, and a solve reads
+//! each twice. Two things halve and hide that traffic:
+//! * the values are stored as f32 (converted to f64 as they are loaded; all arithmetic is
+//!   f64). Projective dynamics solves for the correction of its iterate from a residual it
+//!   computes in f64, so the rounding (a solve is then good to about 1e-7) leaves its fixed
+//!   point exactly where it was ([`super::projective`]);
+//! * the substitutions walk the values in address order, but in blocks of a few hundred
+//!   bytes, which the hardware prefetcher does not follow; they ask for the values 8 KB ahead.
+//!
+//! The lane order is fixed, so the result is the same bits on every CPU and thread count.
 
-use super::etree::{NOT_SHARED, TreeSplit};
+use super::etree::TreeSplit;
 use super::parallel::Threads;
+use super::supernode::Block;
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 
 /// The factor L: supernode s spans columns `begin[s]..begin[s + 1]`; its values are a dense
@@ -30,8 +38,11 @@ pub struct Factor {
     values: Vec<usize>,
     pattern: Vec<usize>,
     row: Vec<u32>,
-    /// The blocks' values, as faer's numeric factorisation writes them.
+    /// The blocks' values, as faer's numeric factorisation writes them (emptied by
+    /// [`Self::finish`]).
     pub l: Vec<f64>,
+    /// The blocks' values rounded to f32, which the substitutions read ([`Self::finish`]).
+    stored: Vec<f32>,
     /// 1 / L_jj for every column j ([`Self::finish`]): a substitution multiplies by it,
     /// because a division on each column's critical path would cost its latency per column.
     inv_diagonal: Vec<f64>,
@@ -103,6 +114,7 @@ impl Factor {
                     pattern,
                     row,
                     l: vec![0.0; symbolic.len_val()],
+                    stored: vec![],
                     inv_diagonal: vec![],
                 });
             }
@@ -130,20 +142,28 @@ impl Factor {
             pattern,
             row,
             l: vec![0.0; symbolic.len_val()],
+            stored: vec![],
             inv_diagonal: vec![],
         })
     }
 
-    /// Takes in the values that the numeric factorisation wrote to [`Self::l`].
+    /// Takes in the values that the numeric factorisation wrote to [`Self::l`]: the
+    /// diagonal's reciprocals in f64, and every value rounded to f32 for the substitutions,
+    /// which then read half the bytes. (Projective dynamics solves for the correction to its
+    /// iterate, whose residual it computes in f64, so the rounding slows its convergence by a
+    /// little and leaves its fixed point where it was: see [`super::projective`].)
     pub fn finish(&mut self) {
         let n = self.begin.len() - 1;
         let mut inv = Vec::with_capacity(self.begin[n]);
         for s in 0..n {
-            let (start, end, _, block) = self.supernode(s);
-            let rows = block.len() / (end - start).max(1);
-            inv.extend((0..end - start).map(|j| 1.0 / block[j * rows + j]));
+            let cols = self.begin[s + 1] - self.begin[s];
+            let rows = cols + self.pattern[s + 1] - self.pattern[s];
+            let at = self.values[s];
+            inv.extend((0..cols).map(|j| 1.0 / self.l[at + j * rows + j]));
         }
         self.inv_diagonal = inv;
+        self.stored = self.l.iter().map(|&v| v as f32).collect();
+        self.l = Vec::new();
     }
 
     /// Solves L Lᵀ u = b in place for two right-hand sides, `x` and `y`; with a split tree
@@ -162,7 +182,7 @@ impl Factor {
             return;
         };
         let [ga, gb] = &split.groups;
-        let sharing = self.l.len() >= PARALLEL_MIN_VALUES;
+        let sharing = self.len() >= PARALLEL_MIN_VALUES;
         let Substitution { below, spill, top } = work;
         let [below_a, below_b] = below;
         let [spill_a, spill_b] = spill;
@@ -179,11 +199,10 @@ impl Factor {
         // those added in a fixed order; then the shared supernodes.
         {
             let [mut a, mut b] = spans(split, x, y);
-            let slot = &split.slot[..];
             threads.join(
                 sharing,
-                || self.forward(ga.supernodes(), &mut a, below_a, Some((slot, spill_a))),
-                || self.forward(gb.supernodes(), &mut b, below_b, Some((slot, spill_b))),
+                || self.forward(ga.supernodes(), &mut a, below_a, Some((split, spill_a))),
+                || self.forward(gb.supernodes(), &mut b, below_b, Some((split, spill_b))),
             );
         }
         for (q, &r) in split.top_rows.iter().enumerate() {
@@ -212,12 +231,17 @@ impl Factor {
         top.y
             .extend(split.top_rows.iter().map(|&r| all.y[r as usize]));
         let [mut a, mut b] = spans(split, x, y);
-        let (slot, top) = (&split.slot[..], &*top);
+        let top = &*top;
         threads.join(
             sharing,
-            || self.backward(ga.supernodes().rev(), &mut a, below_a, Some((slot, top))),
-            || self.backward(gb.supernodes().rev(), &mut b, below_b, Some((slot, top))),
+            || self.backward(ga.supernodes().rev(), &mut a, below_a, Some((split, top))),
+            || self.backward(gb.supernodes().rev(), &mut b, below_b, Some((split, top))),
         );
+    }
+
+    /// The factor's stored values (0 before [`Self::finish`]).
+    pub fn len(&self) -> usize {
+        self.stored.len()
     }
 
     fn supernodes(&self) -> usize {
@@ -231,7 +255,7 @@ impl Factor {
         supernodes: impl Iterator<Item = usize>,
         span: &mut Span,
         below: &mut Below,
-        shared: Option<(&[u32], &mut Below)>,
+        shared: Option<(&TreeSplit, &mut Below)>,
     ) {
         #[cfg(target_arch = "x86_64")]
         if super::wide::available() {
@@ -239,7 +263,7 @@ impl Factor {
             unsafe { self.forward_avx(supernodes, span, below, shared) };
             return;
         }
-        self.forward_pass(supernodes, span, below, shared);
+        self.forward_pass::<false>(supernodes, span, below, shared);
     }
 
     /// [`Self::forward_pass`] compiled for AVX.
@@ -253,9 +277,9 @@ impl Factor {
         supernodes: impl Iterator<Item = usize>,
         span: &mut Span,
         below: &mut Below,
-        shared: Option<(&[u32], &mut Below)>,
+        shared: Option<(&TreeSplit, &mut Below)>,
     ) {
-        self.forward_pass(supernodes, span, below, shared);
+        self.forward_pass::<true>(supernodes, span, below, shared);
     }
 
     /// Lᵀ u = v over `supernodes` (descending), within `span`; rows with a `shared` slot are
@@ -265,7 +289,7 @@ impl Factor {
         supernodes: impl Iterator<Item = usize>,
         span: &mut Span,
         below: &mut Below,
-        shared: Option<(&[u32], &Below)>,
+        shared: Option<(&TreeSplit, &Below)>,
     ) {
         #[cfg(target_arch = "x86_64")]
         if super::wide::available() {
@@ -273,7 +297,7 @@ impl Factor {
             unsafe { self.backward_avx(supernodes, span, below, shared) };
             return;
         }
-        self.backward_pass(supernodes, span, below, shared);
+        self.backward_pass::<false>(supernodes, span, below, shared);
     }
 
     /// [`Self::backward_pass`] compiled for AVX.
@@ -287,224 +311,159 @@ impl Factor {
         supernodes: impl Iterator<Item = usize>,
         span: &mut Span,
         below: &mut Below,
-        shared: Option<(&[u32], &Below)>,
+        shared: Option<(&TreeSplit, &Below)>,
     ) {
-        self.backward_pass(supernodes, span, below, shared);
+        self.backward_pass::<true>(supernodes, span, below, shared);
     }
 
     #[inline(always)]
-    fn forward_pass(
+    fn forward_pass<const AVX: bool>(
         &self,
         supernodes: impl Iterator<Item = usize>,
         span: &mut Span,
         below: &mut Below,
-        mut shared: Option<(&[u32], &mut Below)>,
+        mut shared: Option<(&TreeSplit, &mut Below)>,
     ) {
+        let mut ahead = Prefetch::default();
         for s in supernodes {
-            let (start, end, pattern, _) = self.supernode(s);
+            let (start, end, pattern, block) = self.supernode(s);
+            ahead.forward(&self.stored, self.values[s] + block.values.len());
             let (lo, x, y) = (span.lo, &mut *span.x, &mut *span.y);
-            self.forward_block(
-                s,
-                &mut x[start - lo..end - lo],
-                &mut y[start - lo..end - lo],
-                below,
-            );
-            match &mut shared {
-                None => {
-                    for ((&r, &bx), &by) in pattern.iter().zip(&below.x).zip(&below.y) {
-                        let r = r as usize - lo;
-                        x[r] -= bx;
-                        y[r] -= by;
-                    }
-                }
-                Some((slot, spill)) => {
-                    for ((&r, &bx), &by) in pattern.iter().zip(&below.x).zip(&below.y) {
-                        match slot[r as usize] {
-                            NOT_SHARED => {
-                                let r = r as usize - lo;
-                                x[r] -= bx;
-                                y[r] -= by;
-                            }
-                            q => {
-                                spill.x[q as usize] += bx;
-                                spill.y[q as usize] += by;
-                            }
-                        }
-                    }
+            let (xs, ys) = (&mut x[start - lo..end - lo], &mut y[start - lo..end - lo]);
+            block.solve_diagonal_forward(&self.inv_diagonal[start..end], xs, ys);
+            let (bx, by) = below.rows(pattern.len());
+            block.product_below::<AVX>(xs, ys, bx, by);
+            let (bx, by) = (&*bx, &*by);
+            // The rows below in this span, then (in a half) the shared rows, which come last.
+            let from = shared
+                .as_ref()
+                .map_or(pattern.len(), |(split, _)| split.shared_from[s] as usize);
+            for ((&r, &bx), &by) in pattern[..from].iter().zip(bx).zip(by) {
+                let r = r as usize - lo;
+                x[r] -= bx;
+                y[r] -= by;
+            }
+            if let Some((split, spill)) = &mut shared {
+                let rows = pattern[from..].iter().zip(&bx[from..]).zip(&by[from..]);
+                for ((&r, &bx), &by) in rows {
+                    let q = split.slot[r as usize] as usize;
+                    spill.x[q] += bx;
+                    spill.y[q] += by;
                 }
             }
         }
     }
 
     #[inline(always)]
-    fn backward_pass(
+    fn backward_pass<const AVX: bool>(
         &self,
         supernodes: impl Iterator<Item = usize>,
         span: &mut Span,
         below: &mut Below,
-        shared: Option<(&[u32], &Below)>,
+        shared: Option<(&TreeSplit, &Below)>,
     ) {
+        let mut ahead = Prefetch::default();
         for s in supernodes {
-            let (start, end, pattern, _) = self.supernode(s);
+            let (start, end, pattern, block) = self.supernode(s);
+            ahead.backward(&self.stored, self.values[s]);
             let (lo, x, y) = (span.lo, &mut *span.x, &mut *span.y);
-            below.x.clear();
-            below.y.clear();
-            match shared {
-                None => {
-                    below.x.extend(pattern.iter().map(|&r| x[r as usize - lo]));
-                    below.y.extend(pattern.iter().map(|&r| y[r as usize - lo]));
-                }
-                Some((slot, top)) => {
-                    for &r in pattern {
-                        let (u, w) = match slot[r as usize] {
-                            NOT_SHARED => (x[r as usize - lo], y[r as usize - lo]),
-                            q => (top.x[q as usize], top.y[q as usize]),
-                        };
-                        below.x.push(u);
-                        below.y.push(w);
-                    }
+            let (bx, by) = below.rows(pattern.len());
+            let from = shared.map_or(pattern.len(), |(split, _)| split.shared_from[s] as usize);
+            for ((&r, u), w) in pattern[..from].iter().zip(&mut *bx).zip(&mut *by) {
+                (*u, *w) = (x[r as usize - lo], y[r as usize - lo]);
+            }
+            if let Some((split, top)) = shared {
+                let rows = pattern[from..]
+                    .iter()
+                    .zip(&mut bx[from..])
+                    .zip(&mut by[from..]);
+                for ((&r, u), w) in rows {
+                    let q = split.slot[r as usize] as usize;
+                    (*u, *w) = (top.x[q], top.y[q]);
                 }
             }
-            self.backward_block(
-                s,
-                &mut x[start - lo..end - lo],
-                &mut y[start - lo..end - lo],
-                below,
-            );
-        }
-    }
-
-    /// Supernode s forward: solves its diagonal block in `xs`, `ys` (its columns) and leaves
-    /// Σ_j L[k, j] u_j for its pattern rows k in `below`.
-    #[inline(always)]
-    fn forward_block(&self, s: usize, xs: &mut [f64], ys: &mut [f64], below: &mut Below) {
-        let (start, end, pattern, block) = self.supernode(s);
-        let (cols, p) = (end - start, pattern.len());
-        let rows = cols + p;
-        // The diagonal block, column by column.
-        let inv = &self.inv_diagonal[start..end];
-        for (j, col) in block.chunks_exact(rows).enumerate() {
-            let (xj, yj) = (xs[j] * inv[j], ys[j] * inv[j]);
-            xs[j] = xj;
-            ys[j] = yj;
-            let c = &col[j + 1..cols];
-            for ((xi, yi), &v) in xs[j + 1..].iter_mut().zip(&mut ys[j + 1..]).zip(c) {
-                *xi -= xj * v;
-                *yi -= yj * v;
-            }
-        }
-        below.x.clear();
-        below.x.resize(p, 0.0);
-        below.y.clear();
-        below.y.resize(p, 0.0);
-        if p == 0 {
-            return;
-        }
-        // The rows below: Σ_j L[k, j] u_j, four columns at a time, in column order.
-        let mut j = 0;
-        while j + 4 <= cols {
-            let c = |q: usize| &block[(j + q) * rows + cols..(j + q + 1) * rows];
-            let (c0, c1, c2, c3) = (c(0), c(1), c(2), c(3));
-            let (u0, u1, u2, u3) = (xs[j], xs[j + 1], xs[j + 2], xs[j + 3]);
-            for ((((b, &v0), &v1), &v2), &v3) in below.x.iter_mut().zip(c0).zip(c1).zip(c2).zip(c3)
-            {
-                *b = *b + u0 * v0 + u1 * v1 + u2 * v2 + u3 * v3;
-            }
-            let (u0, u1, u2, u3) = (ys[j], ys[j + 1], ys[j + 2], ys[j + 3]);
-            for ((((b, &v0), &v1), &v2), &v3) in below.y.iter_mut().zip(c0).zip(c1).zip(c2).zip(c3)
-            {
-                *b = *b + u0 * v0 + u1 * v1 + u2 * v2 + u3 * v3;
-            }
-            j += 4;
-        }
-        for j in j..cols {
-            let c = &block[j * rows + cols..(j + 1) * rows];
-            let u = xs[j];
-            for (b, &v) in below.x.iter_mut().zip(c) {
-                *b += u * v;
-            }
-            let u = ys[j];
-            for (b, &v) in below.y.iter_mut().zip(c) {
-                *b += u * v;
-            }
-        }
-    }
-
-    /// Supernode s backward, its pattern rows' values in `below`: first every column's dot
-    /// product with them (independent of each other), then the diagonal block from its last
-    /// column, whose short dot products are summed in order.
-    #[inline(always)]
-    fn backward_block(&self, s: usize, xs: &mut [f64], ys: &mut [f64], below: &Below) {
-        let (start, end, pattern, block) = self.supernode(s);
-        let cols = end - start;
-        let rows = cols + pattern.len();
-        let inv = &self.inv_diagonal[start..end];
-        if !pattern.is_empty() {
-            for (j, col) in block.chunks_exact(rows).enumerate() {
-                let (px, py) = dot2(&col[cols..], &below.x, &below.y);
-                xs[j] -= px;
-                ys[j] -= py;
-            }
-        }
-        for (j, col) in block.chunks_exact(rows).enumerate().rev() {
-            let c = &col[j + 1..cols];
-            let (dx, dy) = if c.len() < 16 {
-                let (mut dx, mut dy) = (0.0, 0.0);
-                for ((&v, &u), &w) in c.iter().zip(&xs[j + 1..]).zip(&ys[j + 1..]) {
-                    dx += v * u;
-                    dy += v * w;
-                }
-                (dx, dy)
-            } else {
-                dot2(c, &xs[j + 1..], &ys[j + 1..])
-            };
-            xs[j] = (xs[j] - dx) * inv[j];
-            ys[j] = (ys[j] - dy) * inv[j];
+            let (xs, ys) = (&mut x[start - lo..end - lo], &mut y[start - lo..end - lo]);
+            block.subtract_pattern_dots::<AVX>(bx, by, xs, ys);
+            block.solve_diagonal_backward::<AVX>(&self.inv_diagonal[start..end], xs, ys);
         }
     }
 
     /// Supernode s: its first and one-past-last column, its pattern and its block.
     #[inline(always)]
-    fn supernode(&self, s: usize) -> (usize, usize, &[u32], &[f64]) {
+    fn supernode(&self, s: usize) -> (usize, usize, &[u32], Block<'_>) {
         let (start, end) = (self.begin[s], self.begin[s + 1]);
         let pattern = &self.row[self.pattern[s]..self.pattern[s + 1]];
-        let len = (end - start + pattern.len()) * (end - start);
-        (
-            start,
-            end,
-            pattern,
-            &self.l[self.values[s]..self.values[s] + len],
-        )
+        let (cols, rows) = (end - start, end - start + pattern.len());
+        let values = &self.stored[self.values[s]..self.values[s] + rows * cols];
+        (start, end, pattern, Block { values, cols, rows })
     }
 }
 
-/// (Σ c_k x_k, Σ c_k y_k), each in eight lanes (k mod 8), folded as (l + l+4), then
-/// (0 + 1) + (2 + 3): the lanes are independent, so the loop vectorises into independent
-/// vector sums, and the order is fixed.
-#[inline(always)]
-fn dot2(c: &[f64], x: &[f64], y: &[f64]) -> (f64, f64) {
-    let n = c.len().min(x.len()).min(y.len());
-    let (c, x, y) = (&c[..n], &x[..n], &y[..n]);
-    let (mut ax, mut ay) = ([0.0f64; 8], [0.0f64; 8]);
-    let (cc, xc, yc) = (c.chunks_exact(8), x.chunks_exact(8), y.chunks_exact(8));
-    let (cr, xr, yr) = (cc.remainder(), xc.remainder(), yc.remainder());
-    for ((c8, x8), y8) in cc.zip(xc).zip(yc) {
-        for l in 0..8 {
-            ax[l] += c8[l] * x8[l];
-            ay[l] += c8[l] * y8[l];
+/// Asks for the factor's values a fixed distance ahead of the substitution's, which walks them
+/// in address order (ascending forward, descending back) but in blocks too small for the
+/// hardware prefetcher to follow.
+#[derive(Default)]
+struct Prefetch {
+    /// Values up to here (forward) or from here (backward) were asked for.
+    done: Option<usize>,
+}
+
+/// Values in a 64-byte cache line.
+const VALUES_PER_LINE: usize = 16;
+
+/// How far ahead to ask, in values.
+const PREFETCH_AHEAD: usize = 2048;
+
+impl Prefetch {
+    #[inline(always)]
+    fn forward(&mut self, l: &[f32], upto: usize) {
+        let target = (upto + PREFETCH_AHEAD).min(l.len());
+        let mut at = self
+            .done
+            .unwrap_or(upto)
+            .max(upto.saturating_sub(PREFETCH_AHEAD));
+        while at < target {
+            fetch(l, at);
+            at += VALUES_PER_LINE;
         }
+        self.done = Some(at.max(self.done.unwrap_or(0)));
     }
-    for (l, ((&c, &x), &y)) in cr.iter().zip(xr).zip(yr).enumerate() {
-        ax[l] += c * x;
-        ay[l] += c * y;
+
+    #[inline(always)]
+    fn backward(&mut self, l: &[f32], from: usize) {
+        let target = from.saturating_sub(PREFETCH_AHEAD);
+        let mut at = self.done.unwrap_or(from).min(from + PREFETCH_AHEAD);
+        while at > target {
+            at = at.saturating_sub(VALUES_PER_LINE);
+            fetch(l, at);
+        }
+        self.done = Some(at.min(self.done.unwrap_or(usize::MAX)));
     }
-    (fold(ax), fold(ay))
 }
 
 #[inline(always)]
-fn fold(a: [f64; 8]) -> f64 {
-    let s: [f64; 4] = std::array::from_fn(|l| a[l] + a[l + 4]);
-    (s[0] + s[1]) + (s[2] + s[3])
+fn fetch(l: &[f32], at: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if at < l.len() {
+        // SAFETY: a prefetch has no effect beyond the cache, and SSE is part of x86_64.
+        unsafe {
+            std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(
+                l.as_ptr().add(at).cast(),
+            )
+        };
+    }
+}
+
+impl Below {
+    /// The first `n` values of x and y, grown if need be (their old values are left).
+    #[inline(always)]
+    fn rows(&mut self, n: usize) -> (&mut [f64], &mut [f64]) {
+        if self.x.len() < n {
+            self.x.resize(n, 0.0);
+            self.y.resize(n, 0.0);
+        }
+        (&mut self.x[..n], &mut self.y[..n])
+    }
 }
 
 #[cfg(test)]
@@ -577,12 +536,17 @@ mod tests {
     }
 
     /// Figures, no assertion on time: a solve of the 256² grid's factor on 1 and 2 threads
-    /// against one plain read of its values, which bounds what any substitution can cost
-    /// (`cargo test --release --lib substitutions_against -- --ignored --nocapture`).
+    /// against one plain read of its values, which bounds what any substitution can cost, and
+    /// each pass over the supernodes of each width alone (`W=180` for another grid:
+    /// `cargo test --release --lib substitutions_against -- --ignored --nocapture`).
     #[test]
     #[ignore = "a measurement: prints figures"]
     fn substitutions_against_one_read_of_the_factor() {
-        let (n, t) = grid_matrix(256);
+        let w = std::env::var("W")
+            .ok()
+            .and_then(|w| w.parse().ok())
+            .unwrap_or(256);
+        let (n, t) = grid_matrix(w);
         let (f, _) = factor(n, &t);
         let time = |run: &mut dyn FnMut()| {
             run();
@@ -594,9 +558,9 @@ mod tests {
         };
         let read = time(&mut || {
             let mut acc = [0.0f64; 4];
-            for c in f.l.chunks_exact(4) {
+            for c in f.stored.chunks_exact(4) {
                 for q in 0..4 {
-                    acc[q] += c[q];
+                    acc[q] += f64::from(c[q]);
                 }
             }
             std::hint::black_box(acc);
@@ -604,8 +568,8 @@ mod tests {
         let mut line = format!(
             "{}: factor of {} values ({:.1} MB); one read {read:.2} ms",
             crate::bench::machine(),
-            f.l.len(),
-            f.l.len() as f64 * 8e-6
+            f.len(),
+            f.len() as f64 * 4e-6
         );
         for threads in [1, 2] {
             let pool = Threads::new(threads).unwrap();
@@ -619,6 +583,36 @@ mod tests {
             line += &format!("; solve on {threads} thread(s) {ms:.2} ms");
         }
         println!("{line}");
+        let (mut x, mut y) = (vec![0.0; n], vec![0.0; n]);
+        for (lo, hi) in [(0, 4), (4, 16), (16, 64), (64, usize::MAX)] {
+            let pick: Vec<usize> = (0..f.supernodes())
+                .filter(|&s| (lo..hi).contains(&(f.begin[s + 1] - f.begin[s])))
+                .collect();
+            let values: usize = pick.iter().map(|&s| f.supernode(s).3.values.len()).sum();
+            let mut below = Below::default();
+            let fw = time(&mut || {
+                let mut all = Span {
+                    lo: 0,
+                    x: &mut x,
+                    y: &mut y,
+                };
+                f.forward(pick.iter().copied(), &mut all, &mut below, None);
+            });
+            let bw = time(&mut || {
+                let mut all = Span {
+                    lo: 0,
+                    x: &mut x,
+                    y: &mut y,
+                };
+                f.backward(pick.iter().rev().copied(), &mut all, &mut below, None);
+            });
+            println!(
+                "cols {lo}..{hi}: {} supernodes, {values} values: forward {fw:.2} ms ({:.2} ns/value), backward {bw:.2} ms ({:.2} ns/value)",
+                pick.len(),
+                fw * 1e6 / values as f64,
+                bw * 1e6 / values as f64
+            );
+        }
     }
 
     #[test]
@@ -630,42 +624,58 @@ mod tests {
             let u: Vec<(f64, f64)> = (0..n)
                 .map(|i| ((i as f64 * 0.37).sin(), (i as f64 * 0.11).cos()))
                 .collect();
-            let mut b = vec![(0.0, 0.0); n];
-            for e in &t {
-                let (r, c, v) = (e.row, e.col, e.val);
-                b[r].0 += v * u[c].0;
-                b[r].1 += v * u[c].1;
-                if r != c {
-                    b[c].0 += v * u[r].0;
-                    b[c].1 += v * u[r].1;
+            let times = |u: &[(f64, f64)]| {
+                let mut b = vec![(0.0, 0.0); n];
+                for e in &t {
+                    let (r, c, v) = (e.row, e.col, e.val);
+                    b[r].0 += v * u[c].0;
+                    b[r].1 += v * u[c].1;
+                    if r != c {
+                        b[c].0 += v * u[r].0;
+                        b[c].1 += v * u[r].1;
+                    }
                 }
-            }
+                b
+            };
+            let b = times(&u);
             let fwd: Vec<usize> = match symbolic.perm() {
                 Some(p) => p.arrays().0.to_vec(),
                 None => (0..n).collect(),
             };
+            let one = Threads::new(1).unwrap();
             let mut x: Vec<f64> = fwd.iter().map(|&r| b[r].0).collect();
             let mut y: Vec<f64> = fwd.iter().map(|&r| b[r].1).collect();
-            f.solve(
-                &mut x,
-                &mut y,
-                &mut Substitution::default(),
-                &Threads::new(1).unwrap(),
-            );
-            for (p, &r) in fwd.iter().enumerate() {
-                assert!(
-                    (x[p] - u[r].0).abs() < 1e-12,
-                    "w {w}: x[{r}] {} vs {}",
-                    x[p],
-                    u[r].0
-                );
-                assert!(
-                    (y[p] - u[r].1).abs() < 1e-12,
-                    "w {w}: y[{r}] {} vs {}",
-                    y[p],
-                    u[r].1
-                );
+            f.solve(&mut x, &mut y, &mut Substitution::default(), &one);
+            // The factor's values are rounded to f32: a solve is good to about 1e-6 ...
+            let error = |x: &[f64], y: &[f64]| {
+                fwd.iter()
+                    .enumerate()
+                    .map(|(p, &r)| (x[p] - u[r].0).abs().max((y[p] - u[r].1).abs()))
+                    .fold(0.0, f64::max)
+            };
+            let first = error(&x, &y);
+            assert!(first < 1e-6, "w {w}: error {first:e}");
+            // ... and solves for the correction from the f64 residual b − A u converge to u.
+            let (mut xr, mut yr) = (x.clone(), y.clone());
+            for _ in 0..4 {
+                let mut now = vec![(0.0, 0.0); n];
+                for (p, &r) in fwd.iter().enumerate() {
+                    now[r] = (xr[p], yr[p]);
+                }
+                let au = times(&now);
+                let mut dx: Vec<f64> = fwd.iter().map(|&r| b[r].0 - au[r].0).collect();
+                let mut dy: Vec<f64> = fwd.iter().map(|&r| b[r].1 - au[r].1).collect();
+                f.solve(&mut dx, &mut dy, &mut Substitution::default(), &one);
+                for p in 0..n {
+                    xr[p] += dx[p];
+                    yr[p] += dy[p];
+                }
             }
+            let refined = error(&xr, &yr);
+            assert!(
+                refined < 1e-13,
+                "w {w}: refined error {refined:e} (first {first:e})"
+            );
             // Two threads give one thread's bits; the tree splits on the bigger grids.
             let two = Threads::new(2).unwrap();
             let mut x2: Vec<f64> = fwd.iter().map(|&r| b[r].0).collect();
@@ -674,7 +684,7 @@ mod tests {
             assert_eq!((&x, &y), (&x2, &y2), "w {w}");
             assert_eq!(f.split.is_some(), w >= 23, "w {w}");
             // (The 180² factor is big enough for the halves to run at once.)
-            assert_eq!(f.l.len() >= PARALLEL_MIN_VALUES, w == 180, "w {w}");
+            assert_eq!(f.len() >= PARALLEL_MIN_VALUES, w == 180, "w {w}");
             // Without the split, the portable and the AVX build agree bit for bit, and with
             // the split to round-off.
             let whole = Factor {
@@ -698,8 +708,8 @@ mod tests {
                 };
             let all = 0..whole.supernodes();
             let portable = solve_with(
-                &|span, below| whole.forward_pass(all.clone(), span, below, None),
-                &|span, below| whole.backward_pass(all.clone().rev(), span, below, None),
+                &|span, below| whole.forward_pass::<false>(all.clone(), span, below, None),
+                &|span, below| whole.backward_pass::<false>(all.clone().rev(), span, below, None),
             );
             let dispatched = solve_with(
                 &|span, below| whole.forward(all.clone(), span, below, None),

@@ -23,6 +23,9 @@ pub struct TreeSplit {
     pub slot: Vec<u32>,
     /// The shared rows, by slot.
     pub top_rows: Vec<u32>,
+    /// Where each supernode's shared rows begin in its rows below: they are a supernode's
+    /// highest ancestors, so they come last.
+    pub shared_from: Vec<u32>,
 }
 
 /// One half: whole subtrees, each a run of supernodes, in one column range.
@@ -149,11 +152,21 @@ impl TreeSplit {
                         top_rows.push(r as u32);
                     }
                 }
+                let mut shared_from = Vec::with_capacity(n);
+                for s in 0..n {
+                    let rows = rows_below(s);
+                    let from = rows.partition_point(|&r| slot[r as usize] == NOT_SHARED);
+                    if rows[from..].iter().any(|&r| slot[r as usize] == NOT_SHARED) {
+                        return None;
+                    }
+                    shared_from.push(from as u32);
+                }
                 return Some(TreeSplit {
                     groups: [half(a), half(b)],
                     top: top.into_iter().map(|t| t as u32).collect(),
                     slot,
                     top_rows,
+                    shared_from,
                 });
             }
             // Open up the biggest subtree: its root joins the shared top.
@@ -197,6 +210,7 @@ mod tests {
         assert_eq!(b.supernodes().collect::<Vec<_>>(), [3, 4, 5]);
         assert_eq!((a.columns.clone(), b.columns.clone()), (0..3, 3..6));
         assert_eq!((split.top, split.top_rows), (vec![6], vec![6]));
+        assert_eq!(split.shared_from, [1, 1, 0, 1, 1, 0, 0]);
         assert_eq!(
             split.slot,
             [

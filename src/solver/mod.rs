@@ -27,6 +27,7 @@ pub mod stability;
 pub mod state;
 pub mod step;
 pub(crate) mod stiffness;
+pub(crate) mod supernode;
 pub(crate) mod team;
 pub(crate) mod wide;
 pub(crate) mod xpbd;

@@ -3,7 +3,7 @@
 //! Pair passes (the spring forces, implicit Euler's K u) evaluate each spring once and scatter
 //! without atomics: the packed springs are split into one contiguous part per thread; a part
 //! writes its own slice of the output, the particles no other part touches, and records its
-//! contributions to the rest, which are added after (see [`scatter`]). Per-particle passes
+//! contributions to the rest, which are added after (see [`scatter_from`]). Per-particle passes
 //! split the particle arrays into chunks ([`Threads::chunked`]). Small scenes run
 //! serially: below [`PARALLEL_MIN_SPRINGS`] the cost of waking a thread exceeds the work.
 
@@ -431,7 +431,9 @@ pub fn spring_forces_from(
     scatter_from(threads, buffers, f, springs, &SpringForces(x), init);
 }
 
-/// out += every contribution of `pass` over `pairs`, on the pool's threads when worthwhile.
+/// out = init + every contribution of `pass` over `pairs`, on the pool's threads when
+/// worthwhile: `init(start, slice)` writes each particle's starting value into `slice`, the
+/// particles from `start` on (see [`spring_forces_from`]).
 ///
 /// The pairs are split into one contiguous part per thread, and each part's particles into
 /// those no other part touches (its exclusive range, a slice of `out` of its own) and the rest.
@@ -441,6 +443,19 @@ pub fn spring_forces_from(
 /// after the parallel part. No atomics, no unsafe, no full-size buffers: one parallel region.
 /// `buffers` caches the split for these pairs; it is redone when their number or the thread
 /// count changes, and the solver starts new buffers whenever it repacks the springs.
+pub fn scatter_from<P: PairPass>(
+    threads: &Threads,
+    buffers: &mut SpringBuffers,
+    out: &mut [DVec2],
+    pairs: &[P::Pair],
+    pass: &P,
+    init: &(impl Fn(usize, &mut [DVec2]) + Sync),
+) {
+    scatter_parts(threads, buffers, out, pairs, pass, Some(init));
+}
+
+/// out += every contribution of `pass` over `pairs` ([`scatter_from`] without a start).
+#[cfg(test)]
 pub fn scatter<P: PairPass>(
     threads: &Threads,
     buffers: &mut SpringBuffers,
@@ -458,19 +473,7 @@ pub fn scatter<P: PairPass>(
     );
 }
 
-/// [`scatter`] into `out` = init + Σ contributions (see [`spring_forces_from`]).
-pub fn scatter_from<P: PairPass>(
-    threads: &Threads,
-    buffers: &mut SpringBuffers,
-    out: &mut [DVec2],
-    pairs: &[P::Pair],
-    pass: &P,
-    init: &(impl Fn(usize, &mut [DVec2]) + Sync),
-) {
-    scatter_parts(threads, buffers, out, pairs, pass, Some(init));
-}
-
-/// [`scatter`], and with `init`, each part first starts its own particles, and the particles
+/// [`scatter_from`]; with `init`, each part first starts its own particles, and the particles
 /// of no part are started after the region, before the recorded contributions are added.
 fn scatter_parts<P: PairPass, I: Fn(usize, &mut [DVec2]) + Sync>(
     threads: &Threads,

@@ -14,8 +14,15 @@
 //!   one forward and one backward substitution, for x and y together (an n × 2 right-hand side:
 //!   the factor is read once per iteration).
 //!
+//! The global step is solved for the correction: x ← x + Ã⁻¹ r with the residual
+//! r = M y + h² J d − (M + h² L) x = M (y − x) + Σ_s h² k_s (d_s − (x_a − x_b)), one pair pass
+//! in f64. With the exact inverse this is the textbook update (x + A⁻¹(b − A x) = A⁻¹ b); the
+//! factor's values are stored in f32, which halves what each iteration reads
+//! ([`super::cholesky`]), and in this form that rounding costs only a little of each
+//! iteration's progress: the fixed point, r = 0, is Φ's minimiser in f64 whatever Ã is.
+//!
 //! Particles with inverse mass 0 (pinned or held) are eliminated: their end-of-step position
-//! x0 + h v0 is known, and their springs move it to the right-hand side. Every iteration lowers
+//! x0 + h v0 is known, and their springs' terms at the free end carry it. Every iteration lowers
 //! Φ, and the iterations start from x0 + h v0 (the inertial guess without the body forces):
 //! at rest that is the previous step's shape, so a settled state is the exact equilibrium for
 //! any iteration count (the fixed points of a descent step are Φ's minimisers). The step ends
@@ -23,8 +30,8 @@
 //! implicit Euler.
 
 use super::cholesky::{Factor, Substitution};
-use super::parallel::{PairPass, SpringBuffers, Threads, scatter};
-use super::spring::{projection, scatter_pairs};
+use super::parallel::{PairPass, SpringBuffers, Threads, scatter_from};
+use super::spring::{projection_residual, scatter_pairs};
 use super::state::{PackedSpring, State};
 #[cfg(target_arch = "x86_64")]
 use super::wide;
@@ -54,8 +61,6 @@ pub struct Projective {
     row: Vec<u32>,
     /// Particle of each row.
     particle: Vec<u32>,
-    /// Springs with exactly one free end: (free end's row, fixed end, h² k).
-    boundary: Vec<(u32, u32, f64)>,
     /// The factor, supernode by supernode.
     factor: Factor,
     /// Particle of each row of the factor (the fill-reducing order).
@@ -64,9 +69,9 @@ pub struct Projective {
     z: Vec<DVec2>,
     /// M y, all particles (constant over the step).
     my: Vec<DVec2>,
-    /// The right-hand side, all particles, before the gather.
-    b: Vec<DVec2>,
-    /// The right-hand side in the factor's row order, then the solution, x and y apart, solved
+    /// The residual, all particles, before the gather.
+    r: Vec<DVec2>,
+    /// The residual in the factor's row order, then the correction, x and y apart, solved
     /// together so that each nonzero of the factor is read once for both.
     rhs_x: Vec<f64>,
     rhs_y: Vec<f64>,
@@ -86,14 +91,14 @@ impl std::fmt::Debug for Projective {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Projective")
             .field("rows", &self.particle.len())
-            .field("factor_nonzeros", &self.factor.l.len())
+            .field("factor_nonzeros", &self.factor.len())
             .field("factorizations", &self.factorizations)
             .finish_non_exhaustive()
     }
 }
 
-/// The local step's right-hand side: h² k_s d_s to end a, −h² k_s d_s to end b, four springs
-/// at a time where the CPU has AVX.
+/// The local step's share of the residual: h² k_s (d_s − (z_a − z_b)) to end a, its negative to
+/// end b, four springs at a time where the CPU has AVX.
 struct LocalStep<'z> {
     z: &'z [DVec2],
     h2: f64,
@@ -109,7 +114,11 @@ impl PairPass for LocalStep<'_> {
             unsafe { wide::for_each_projection(self.z, springs, self.h2, add) };
             return;
         }
-        scatter_pairs(springs, |s| Some(projection(s, self.z, self.h2)), add);
+        scatter_pairs(
+            springs,
+            |s| Some(projection_residual(s, self.z, self.h2)),
+            add,
+        );
     }
 }
 
@@ -139,7 +148,6 @@ impl Projective {
         let rows = self.particle.len();
         let mut diagonal: Vec<f64> = self.particle.iter().map(|&i| s.mass[i as usize]).collect();
         let mut entries = Vec::with_capacity(rows + s.springs.len());
-        self.boundary.clear();
         for sp in &s.springs {
             let (ra, rb) = (self.row[sp.a as usize], self.row[sp.b as usize]);
             let c = h2 * sp.k;
@@ -151,14 +159,8 @@ impl Projective {
                     let (r, col) = (ra.max(rb) as usize, ra.min(rb) as usize);
                     entries.push(Triplet::new(r, col, -c));
                 }
-                (true, false) => {
-                    diagonal[ra as usize] += c;
-                    self.boundary.push((ra, sp.b, c));
-                }
-                (false, true) => {
-                    diagonal[rb as usize] += c;
-                    self.boundary.push((rb, sp.a, c));
-                }
+                (true, false) => diagonal[ra as usize] += c,
+                (false, true) => diagonal[rb as usize] += c,
                 (false, false) => {}
             }
         }
@@ -203,7 +205,7 @@ impl Projective {
             None => self.particle.clone(),
         };
         drop(stack);
-        for buf in [&mut self.z, &mut self.my, &mut self.b] {
+        for buf in [&mut self.z, &mut self.my, &mut self.r] {
             buf.resize(n, DVec2::ZERO);
         }
         self.rhs_x.resize(rows, 0.0);
@@ -217,7 +219,7 @@ impl Projective {
 
     /// Nonzeros of the Cholesky factor (0 before the first step).
     pub fn factor_nonzeros(&self) -> usize {
-        self.factor.l.len()
+        self.factor.len()
     }
 
     /// Mean iterations per step so far, if any step was taken.
@@ -270,17 +272,25 @@ impl Projective {
             }
         });
         for _ in 0..iterations {
-            self.b.copy_from_slice(&self.my);
+            // r = M y − (M + h² L) z: M (y − z), and each spring's h² k (d − (z_a − z_b)).
             let local = LocalStep { z: &self.z, h2 };
-            scatter(threads, &mut self.buffers, &mut self.b, &s.springs, &local);
-            for &(r, fixed, c) in &self.boundary {
-                let p = self.z[fixed as usize] * c;
-                let i = self.particle[r as usize] as usize;
-                self.b[i] += p;
-            }
-            for ((bx, by), &i) in self.rhs_x.iter_mut().zip(&mut self.rhs_y).zip(&self.order) {
-                let b = self.b[i as usize];
-                (*bx, *by) = (b.x, b.y);
+            let (my, z, m) = (&self.my[..], &self.z[..], &s.mass[..]);
+            let start = |lo: usize, r: &mut [DVec2]| {
+                for (i, r) in (lo..).zip(r) {
+                    *r = my[i] - z[i] * m[i];
+                }
+            };
+            scatter_from(
+                threads,
+                &mut self.buffers,
+                &mut self.r,
+                &s.springs,
+                &local,
+                &start,
+            );
+            for ((rx, ry), &i) in self.rhs_x.iter_mut().zip(&mut self.rhs_y).zip(&self.order) {
+                let r = self.r[i as usize];
+                (*rx, *ry) = (r.x, r.y);
             }
             self.factor.solve(
                 &mut self.rhs_x,
@@ -289,7 +299,7 @@ impl Projective {
                 threads,
             );
             for ((&x, &y), &i) in self.rhs_x.iter().zip(&self.rhs_y).zip(&self.order) {
-                self.z[i as usize] = DVec2::new(x, y);
+                self.z[i as usize] += DVec2::new(x, y);
             }
         }
         let inv_h = 1.0 / dt;

@@ -22,14 +22,16 @@ pub fn spring_force(s: &PackedSpring, x: &[DVec2]) -> Option<DVec2> {
     Some(d * (-s.k * (l - s.rest) / l))
 }
 
-/// One spring's local step contribution to its end a: h²k · l (L / |l|), l = x_a − x_b, or
-/// h²k · l where |l| is 0 or not a number (the ends coincide: no direction to project on).
+/// One spring's share of projective dynamics' residual at its end a: h²k (d − l) with
+/// l = x_a − x_b and d = l (L / |l|) its local step's projection, computed as
+/// l · (L / |l| − 1) · h²k; 0 where |l| is 0 or not a number (the ends coincide: no direction
+/// to project on, d = l).
 #[inline]
-pub fn projection(s: &PackedSpring, x: &[DVec2], h2: f64) -> DVec2 {
+pub fn projection_residual(s: &PackedSpring, x: &[DVec2], h2: f64) -> DVec2 {
     let l = x[s.a as usize] - x[s.b as usize];
     let len = l.length();
-    let d = if len > 0.0 { l * (s.rest / len) } else { l };
-    d * (h2 * s.k)
+    let q = if len > 0.0 { s.rest / len } else { 1.0 };
+    l * (q - 1.0) * (h2 * s.k)
 }
 
 /// For each spring, `add(a, g)` and `add(b, -g)` with `g = force(spring)` (nothing for `None`),

@@ -9,7 +9,7 @@
 
 #![cfg(target_arch = "x86_64")]
 
-use super::spring::{MIN_SPRING_LENGTH, Run, projection, spring_force};
+use super::spring::{MIN_SPRING_LENGTH, Run, projection_residual, spring_force};
 use super::state::PackedSpring;
 use glam::DVec2;
 use std::arch::x86_64::*;
@@ -170,9 +170,9 @@ unsafe fn four_forces(x: &[DVec2], s: &[PackedSpring], out: &mut [f64; 8]) -> i3
 }
 
 /// Projective dynamics' local step ([`super::projective`]) four springs at a time: for each
-/// spring, `add(a, c)` and `add(b, −c)` with c = d · h²k and d = l · (L / |l|), l = x_a − x_b
-/// (d = l where |l| is 0 or not a number). The operations are [`projection`]'s, in its order,
-/// so the bits are the scalar step's.
+/// spring, `add(a, c)` and `add(b, −c)` with c = l · (L / |l| − 1) · h²k, l = x_a − x_b
+/// (c = 0 where |l| is 0 or not a number). The operations are [`projection_residual`]'s, in
+/// its order, so the bits are the scalar step's.
 ///
 /// # Safety
 /// The CPU must support AVX ([`available`]).
@@ -199,12 +199,12 @@ pub unsafe fn for_each_projection(
         }
     }
     for s in octs.remainder() {
-        run.push((s.a, s.b), Some(projection(s, x, h2)), &mut add);
+        run.push((s.a, s.b), Some(projection_residual(s, x, h2)), &mut add);
     }
     run.finish(add);
 }
 
-/// Writes four springs' [`projection`]s to `out` (x0, y0, x1, y1, ...).
+/// Writes four springs' [`projection_residual`]s to `out` (x0, y0, x1, y1, ...).
 ///
 /// # Safety
 /// The CPU must support AVX ([`available`]).
@@ -218,6 +218,7 @@ unsafe fn four_projections(x: &[DVec2], s: &[PackedSpring], h2: f64, out: &mut [
         // L / |l| where |l| > 0, else 1 (NaN compares false): d = l · 1 = l exactly.
         let positive = _mm256_cmp_pd::<_CMP_GT_OQ>(l, _mm256_setzero_pd());
         let q = _mm256_blendv_pd(_mm256_set1_pd(1.0), _mm256_div_pd(rest, l), positive);
+        let q = _mm256_sub_pd(q, _mm256_set1_pd(1.0));
         let hk = lanes([h2 * s0.k, h2 * s1.k, h2 * s2.k, h2 * s3.k]);
         let c01 = _mm256_mul_pd(
             _mm256_mul_pd(d01, _mm256_unpacklo_pd(q, q)),
@@ -325,7 +326,7 @@ mod tests {
         let mut scalar = vec![DVec2::ZERO; x.len()];
         scatter_pairs(
             &springs,
-            |s| Some(projection(s, &x, h2)),
+            |s| Some(super::super::spring::projection_residual(s, &x, h2)),
             |i, c| scalar[i] += c,
         );
         let bits = |v: &[DVec2]| -> Vec<(u64, u64)> {
