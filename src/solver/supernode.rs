@@ -273,10 +273,22 @@ fn dot(c: &[f32], x: &[f64], y: &[f64]) -> (f64, f64) {
             ay[l] += f64::from(c4[l]) * y4[l];
         }
     }
-    let (mut dx, mut dy) = (
+    let folded = (
         (ax[0] + ax[1]) + (ax[2] + ax[3]),
         (ay[0] + ay[1]) + (ay[2] + ay[3]),
     );
+    dot_tail(c, x, y, full, folded)
+}
+
+/// A dot product's last elements, from `full` on, added in order to the folded lanes.
+#[inline(always)]
+fn dot_tail(
+    c: &[f32],
+    x: &[f64],
+    y: &[f64],
+    full: usize,
+    (mut dx, mut dy): (f64, f64),
+) -> (f64, f64) {
     for k in full..c.len() {
         dx += f64::from(c[k]) * x[k];
         dy += f64::from(c[k]) * y[k];
@@ -294,7 +306,7 @@ unsafe fn dot_avx(c: &[f32], x: &[f64], y: &[f64]) -> (f64, f64) {
     let (x, y) = (&x[..c.len()], &y[..c.len()]);
     let full = c.len() / 4 * 4;
     // SAFETY: the caller guarantees AVX; the loads stay below `full` <= the three lengths.
-    let (mut dx, mut dy) = unsafe {
+    let folded = unsafe {
         let (mut ax, mut ay) = (_mm256_setzero_pd(), _mm256_setzero_pd());
         let mut k = 0;
         while k < full {
@@ -308,11 +320,7 @@ unsafe fn dot_avx(c: &[f32], x: &[f64], y: &[f64]) -> (f64, f64) {
         let s = _mm_add_pd(_mm256_castpd256_pd128(h), _mm256_extractf128_pd(h, 1));
         (_mm_cvtsd_f64(s), _mm_cvtsd_f64(_mm_unpackhi_pd(s, s)))
     };
-    for k in full..c.len() {
-        dx += f64::from(c[k]) * x[k];
-        dy += f64::from(c[k]) * y[k];
-    }
-    (dx, dy)
+    dot_tail(c, x, y, full, folded)
 }
 
 /// Four columns' four-lane sums folded as (0 + 1) + (2 + 3), one column to a lane.
