@@ -23,7 +23,7 @@
 //!
 //! Particles with inverse mass 0 (pinned or held) are eliminated: their end-of-step position
 //! x0 + h v0 is known, and their springs' terms at the free end carry it. Every iteration lowers
-//! Φ, and the iterations start from x0 + h v0 (the inertial guess without the body forces):
+//! Φ (up to the solve's rounding, about 1e-7 of the correction), and the iterations start from x0 + h v0 (the inertial guess without the body forces):
 //! at rest that is the previous step's shape, so a settled state is the exact equilibrium for
 //! any iteration count (the fixed points of a descent step are Φ's minimisers). The step ends
 //! with v1 = (x1 − x0)/h; damping, ground contact and the position update follow as for
