@@ -77,6 +77,7 @@ impl Workspace {
             factorizations: pd.factorizations,
             factorization_seconds: pd.factor_seconds,
             factor_nonzeros: pd.factor_nonzeros(),
+            factor_bytes_per_value: pd.factor_bytes_per_value(),
             xpbd_sweeps_per_step: self.xpbd.sweeps_per_step(),
             xpbd_colours: self.xpbd.colours(),
         }
@@ -102,6 +103,9 @@ pub struct SolveStats {
     pub factorization_seconds: f64,
     /// Projective dynamics: nonzeros of the last Cholesky factor.
     pub factor_nonzeros: usize,
+    /// Projective dynamics: bytes per stored value of the factor, 4 (f32) or 8 (f64, for an
+    /// ill-conditioned matrix); 0 before the first step.
+    pub factor_bytes_per_value: usize,
     /// XPBD: constraint sweeps per time step (substeps × sweeps).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub xpbd_sweeps_per_step: Option<f64>,

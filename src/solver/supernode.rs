@@ -18,25 +18,56 @@
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
 
+/// How the factor's values are stored: f32 (half the bytes) or f64 (for a matrix too
+/// ill-conditioned for f32, see `Factor::finish`). The kernels convert each to f64 as they load
+/// it; the conversion is exact.
+pub(super) trait Value: Copy + Into<f64> {
+    /// Four values from `p` as f64 lanes.
+    ///
+    /// # Safety
+    /// The CPU must support AVX, and `p` must point to four readable values; always inlined,
+    /// this inherits AVX from its caller.
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn load4(p: *const Self) -> __m256d;
+}
+
+impl Value for f32 {
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn load4(p: *const f32) -> __m256d {
+        // SAFETY: the caller's.
+        unsafe { _mm256_cvtps_pd(_mm_loadu_ps(p)) }
+    }
+}
+
+impl Value for f64 {
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn load4(p: *const f64) -> __m256d {
+        // SAFETY: the caller's.
+        unsafe { _mm256_loadu_pd(p) }
+    }
+}
+
 /// One supernode's values: a dense column-major block of `rows` × `cols`, its diagonal block
 /// on top and its pattern rows below.
 #[derive(Clone, Copy)]
-pub(super) struct Block<'a> {
-    pub values: &'a [f32],
+pub(super) struct Block<'a, T> {
+    pub values: &'a [T],
     pub cols: usize,
     pub rows: usize,
 }
 
-impl<'a> Block<'a> {
+impl<'a, T: Value> Block<'a, T> {
     /// Column j below the diagonal block.
     #[inline(always)]
-    fn below(&self, j: usize) -> &'a [f32] {
+    fn below(&self, j: usize) -> &'a [T] {
         &self.values[j * self.rows + self.cols..(j + 1) * self.rows]
     }
 
     /// Column j within the diagonal block, below the diagonal.
     #[inline(always)]
-    fn strictly_lower(&self, j: usize) -> &'a [f32] {
+    fn strictly_lower(&self, j: usize) -> &'a [T] {
         &self.values[j * self.rows + j + 1..j * self.rows + self.cols]
     }
 
@@ -51,7 +82,7 @@ impl<'a> Block<'a> {
             ys[j] = yj;
             let c = self.strictly_lower(j);
             for ((xi, yi), &v) in xs[j + 1..].iter_mut().zip(&mut ys[j + 1..]).zip(c) {
-                let v = f64::from(v);
+                let v: f64 = v.into();
                 *xi -= xj * v;
                 *yi -= yj * v;
             }
@@ -78,7 +109,7 @@ impl<'a> Block<'a> {
         for j in 0..self.cols {
             let (u, w) = (xs[j], ys[j]);
             for ((x, y), &v) in bx.iter_mut().zip(by.iter_mut()).zip(self.below(j)) {
-                let v = f64::from(v);
+                let v: f64 = v.into();
                 *x += v * u;
                 *y += v * w;
             }
@@ -157,7 +188,7 @@ impl<'a> Block<'a> {
                     let (u, w) = (_mm256_set1_pd(xs[j]), _mm256_set1_pd(ys[j]));
                     let c = l.add(j * rows + cols + k);
                     for m in 0..4 {
-                        let v = _mm256_cvtps_pd(_mm_loadu_ps(c.add(4 * m)));
+                        let v = T::load4(c.add(4 * m));
                         ax[m] = _mm256_add_pd(ax[m], _mm256_mul_pd(v, u));
                         ay[m] = _mm256_add_pd(ay[m], _mm256_mul_pd(v, w));
                     }
@@ -171,7 +202,7 @@ impl<'a> Block<'a> {
             while k + 4 <= p {
                 let (mut ax, mut ay) = (_mm256_setzero_pd(), _mm256_setzero_pd());
                 for j in 0..cols {
-                    let v = _mm256_cvtps_pd(_mm_loadu_ps(l.add(j * rows + cols + k)));
+                    let v = T::load4(l.add(j * rows + cols + k));
                     ax = _mm256_add_pd(ax, _mm256_mul_pd(v, _mm256_set1_pd(xs[j])));
                     ay = _mm256_add_pd(ay, _mm256_mul_pd(v, _mm256_set1_pd(ys[j])));
                 }
@@ -183,7 +214,7 @@ impl<'a> Block<'a> {
         for k in k..p {
             let (mut x, mut y) = (0.0, 0.0);
             for j in 0..cols {
-                let v = f64::from(self.values[j * rows + cols + k]);
+                let v: f64 = self.values[j * rows + cols + k].into();
                 x += v * xs[j];
                 y += v * ys[j];
             }
@@ -226,7 +257,7 @@ impl<'a> Block<'a> {
                         _mm256_loadu_pd(by.as_ptr().add(k)),
                     );
                     for m in 0..4 {
-                        let v = _mm256_cvtps_pd(_mm_loadu_ps(c.add(m * rows + k)));
+                        let v = T::load4(c.add(m * rows + k));
                         ax[m] = _mm256_add_pd(ax[m], _mm256_mul_pd(v, u));
                         ay[m] = _mm256_add_pd(ay[m], _mm256_mul_pd(v, w));
                     }
@@ -235,10 +266,10 @@ impl<'a> Block<'a> {
                 let (mut dx, mut dy) = (fold_four(ax), fold_four(ay));
                 for k in full..p {
                     let v = _mm256_set_pd(
-                        f64::from(*c.add(3 * rows + k)),
-                        f64::from(*c.add(2 * rows + k)),
-                        f64::from(*c.add(rows + k)),
-                        f64::from(*c.add(k)),
+                        (*c.add(3 * rows + k)).into(),
+                        (*c.add(2 * rows + k)).into(),
+                        (*c.add(rows + k)).into(),
+                        (*c.add(k)).into(),
                     );
                     dx = _mm256_add_pd(dx, _mm256_mul_pd(v, _mm256_set1_pd(bx[k])));
                     dy = _mm256_add_pd(dy, _mm256_mul_pd(v, _mm256_set1_pd(by[k])));
@@ -259,7 +290,7 @@ impl<'a> Block<'a> {
 
 /// (Σ c_k x_k, Σ c_k y_k) over c's length, in the order of the module docs.
 #[inline(always)]
-fn dot(c: &[f32], x: &[f64], y: &[f64]) -> (f64, f64) {
+fn dot<T: Value>(c: &[T], x: &[f64], y: &[f64]) -> (f64, f64) {
     let (x, y) = (&x[..c.len()], &y[..c.len()]);
     let full = c.len() / 4 * 4;
     let (mut ax, mut ay) = ([0.0f64; 4], [0.0f64; 4]);
@@ -269,8 +300,9 @@ fn dot(c: &[f32], x: &[f64], y: &[f64]) -> (f64, f64) {
         .zip(y.chunks_exact(4))
     {
         for l in 0..4 {
-            ax[l] += f64::from(c4[l]) * x4[l];
-            ay[l] += f64::from(c4[l]) * y4[l];
+            let v: f64 = c4[l].into();
+            ax[l] += v * x4[l];
+            ay[l] += v * y4[l];
         }
     }
     let folded = (
@@ -282,16 +314,17 @@ fn dot(c: &[f32], x: &[f64], y: &[f64]) -> (f64, f64) {
 
 /// A dot product's last elements, from `full` on, added in order to the folded lanes.
 #[inline(always)]
-fn dot_tail(
-    c: &[f32],
+fn dot_tail<T: Value>(
+    c: &[T],
     x: &[f64],
     y: &[f64],
     full: usize,
     (mut dx, mut dy): (f64, f64),
 ) -> (f64, f64) {
     for k in full..c.len() {
-        dx += f64::from(c[k]) * x[k];
-        dy += f64::from(c[k]) * y[k];
+        let v: f64 = c[k].into();
+        dx += v * x[k];
+        dy += v * y[k];
     }
     (dx, dy)
 }
@@ -302,7 +335,7 @@ fn dot_tail(
 /// The CPU must support AVX; always inlined, this inherits AVX from its caller.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn dot_avx(c: &[f32], x: &[f64], y: &[f64]) -> (f64, f64) {
+unsafe fn dot_avx<T: Value>(c: &[T], x: &[f64], y: &[f64]) -> (f64, f64) {
     let (x, y) = (&x[..c.len()], &y[..c.len()]);
     let full = c.len() / 4 * 4;
     // SAFETY: the caller guarantees AVX; the loads stay below `full` <= the three lengths.
@@ -310,7 +343,7 @@ unsafe fn dot_avx(c: &[f32], x: &[f64], y: &[f64]) -> (f64, f64) {
         let (mut ax, mut ay) = (_mm256_setzero_pd(), _mm256_setzero_pd());
         let mut k = 0;
         while k < full {
-            let v = _mm256_cvtps_pd(_mm_loadu_ps(c.as_ptr().add(k)));
+            let v = T::load4(c.as_ptr().add(k));
             ax = _mm256_add_pd(ax, _mm256_mul_pd(v, _mm256_loadu_pd(x.as_ptr().add(k))));
             ay = _mm256_add_pd(ay, _mm256_mul_pd(v, _mm256_loadu_pd(y.as_ptr().add(k))));
             k += 4;
@@ -346,19 +379,24 @@ mod tests {
     use super::*;
 
     /// Blocks of every shape that the AVX loops split differently (16, 4 and single rows; 4
-    /// and single columns) give the portable kernels' bits.
+    /// and single columns), stored in f32 and in f64, give the portable kernels' bits.
     #[test]
     fn avx_kernels_give_the_portable_bits() {
         if !super::super::wide::available() {
             return;
         }
+        check(|v| v as f32);
+        check(|v| v);
+    }
+
+    fn check<T: Value>(store: fn(f64) -> T) {
         let value = |i: usize| {
             ((i as f64 * 0.7).sin() + 1.5) * if i.is_multiple_of(3) { -1.0 } else { 1.0 }
         };
         for cols in [1, 2, 3, 4, 5, 8, 9, 17] {
             for p in [0, 1, 3, 4, 5, 15, 16, 17, 35] {
                 let rows = cols + p;
-                let values: Vec<f32> = (0..rows * cols).map(|i| value(i) as f32).collect();
+                let values: Vec<T> = (0..rows * cols).map(|i| store(value(i))).collect();
                 let inv: Vec<f64> = (0..cols).map(|j| 1.0 / (2.0 + value(j))).collect();
                 let block = Block {
                     values: &values,
@@ -371,13 +409,15 @@ mod tests {
                     let (mut xs, mut ys) = (xs.clone(), ys.clone());
                     let (mut bx, mut by) = (vec![9.0; p], vec![9.0; p]);
                     block.solve_diagonal_forward(&inv, &mut xs, &mut ys);
+                    let mut v = (&mut xs[..], &mut ys[..], &mut bx[..], &mut by[..]);
                     if avx {
-                        // SAFETY: the CPU has AVX, checked above.
-                        unsafe { substitute_avx(&block, &inv, &mut xs, &mut ys, &mut bx, &mut by) };
+                        // SAFETY: the CPU has AVX, checked by the caller.
+                        unsafe { substitute_avx(&block, &inv, &mut v) };
                     } else {
-                        block.product_below::<false>(&xs, &ys, &mut bx, &mut by);
-                        block.subtract_pattern_dots::<false>(&bx, &by, &mut xs, &mut ys);
-                        block.solve_diagonal_backward::<false>(&inv, &mut xs, &mut ys);
+                        let (xs, ys, bx, by) = v;
+                        block.product_below::<false>(xs, ys, bx, by);
+                        block.subtract_pattern_dots::<false>(bx, by, xs, ys);
+                        block.solve_diagonal_backward::<false>(&inv, xs, ys);
                     }
                     let bits = |v: &[f64]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
                     (bits(&bx), bits(&by), bits(&xs), bits(&ys))
@@ -387,19 +427,15 @@ mod tests {
         }
     }
 
+    type Vectors<'v> = (&'v mut [f64], &'v mut [f64], &'v mut [f64], &'v mut [f64]);
+
     /// The AVX kernels after the forward diagonal solve, compiled for AVX.
     ///
     /// # Safety
     /// The CPU must support AVX.
     #[target_feature(enable = "avx")]
-    unsafe fn substitute_avx(
-        block: &Block,
-        inv: &[f64],
-        xs: &mut [f64],
-        ys: &mut [f64],
-        bx: &mut [f64],
-        by: &mut [f64],
-    ) {
+    unsafe fn substitute_avx<T: Value>(block: &Block<T>, inv: &[f64], v: &mut Vectors) {
+        let (xs, ys, bx, by) = v;
         block.product_below::<true>(xs, ys, bx, by);
         block.subtract_pattern_dots::<true>(bx, by, xs, ys);
         block.solve_diagonal_backward::<true>(inv, xs, ys);
