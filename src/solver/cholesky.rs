@@ -40,7 +40,7 @@ pub struct Factor {
     pattern: Vec<usize>,
     row: Vec<u32>,
     /// The blocks' values, as faer's numeric factorisation writes them (emptied by
-    /// [`Self::finish`]).
+    /// [`Self::finish`] when it rounds them to f32).
     pub l: Vec<f64>,
     /// The blocks' values rounded to f32, which the substitutions read instead of [`Self::l`]
     /// when the matrix is well enough conditioned ([`Self::finish`]).
@@ -150,18 +150,17 @@ impl Factor {
     }
 
     /// Takes in the values that the numeric factorisation wrote to [`Self::l`]: the
-    /// diagonal's reciprocals in f64, and every value rounded to f32 for the substitutions,
-    /// which then read half the bytes. (Projective dynamics solves for the correction to its
-    /// iterate, whose residual it computes in f64, so the rounding slows its convergence by a
-    /// little and leaves its fixed point where it was: see [`super::projective`].)
+    /// diagonal's reciprocals in f64, and, if `single`, every value rounded to f32 for the
+    /// substitutions, which then read half the bytes. (Projective dynamics solves for the
+    /// correction to its iterate, whose residual it computes in f64, so the rounding slows its
+    /// convergence by a little and leaves its fixed point where it was: see
+    /// [`super::projective`].)
     pub fn finish(&mut self, single: bool) {
-        let n = self.begin.len() - 1;
+        let n = self.supernodes();
         let mut inv = Vec::with_capacity(self.begin[n]);
         for s in 0..n {
-            let cols = self.begin[s + 1] - self.begin[s];
-            let rows = cols + self.pattern[s + 1] - self.pattern[s];
-            let at = self.values[s];
-            inv.extend((0..cols).map(|j| 1.0 / self.l[at + j * rows + j]));
+            let (_, _, _, b) = self.supernode::<f64>(s);
+            inv.extend((0..b.cols).map(|j| 1.0 / b.values[j * b.rows + j]));
         }
         self.inv_diagonal = inv;
         if single {

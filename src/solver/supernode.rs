@@ -19,7 +19,7 @@
 use std::arch::x86_64::*;
 
 /// How the factor's values are stored: f32 (half the bytes) or f64 (for a matrix too
-/// ill-conditioned for f32, see `Factor::finish`). The kernels convert each to f64 as they load
+/// ill-conditioned for f32, as projective dynamics decides when it factors). The kernels convert each to f64 as they load
 /// it; the conversion is exact.
 pub(super) trait Value: Copy + Into<f64> {
     /// Four values from `p` as f64 lanes.
@@ -148,18 +148,7 @@ impl<'a, T: Value> Block<'a, T> {
         ys: &mut [f64],
     ) {
         for j in (0..self.cols).rev() {
-            let c = self.strictly_lower(j);
-            let (dx, dy) = {
-                #[cfg(target_arch = "x86_64")]
-                if AVX {
-                    // SAFETY: AVX is only asked for where the CPU has it.
-                    unsafe { dot_avx(c, &xs[j + 1..], &ys[j + 1..]) }
-                } else {
-                    dot(c, &xs[j + 1..], &ys[j + 1..])
-                }
-                #[cfg(not(target_arch = "x86_64"))]
-                dot(c, &xs[j + 1..], &ys[j + 1..])
-            };
+            let (dx, dy) = dot_with::<AVX, T>(self.strictly_lower(j), &xs[j + 1..], &ys[j + 1..]);
             xs[j] = (xs[j] - dx) * inv[j];
             ys[j] = (ys[j] - dy) * inv[j];
         }
@@ -286,6 +275,17 @@ impl<'a, T: Value> Block<'a, T> {
             }
         }
     }
+}
+
+/// [`dot_avx`] where `AVX` is asked for, else [`dot`]: the same bits.
+#[inline(always)]
+fn dot_with<const AVX: bool, T: Value>(c: &[T], x: &[f64], y: &[f64]) -> (f64, f64) {
+    #[cfg(target_arch = "x86_64")]
+    if AVX {
+        // SAFETY: AVX is only asked for where the CPU has it.
+        return unsafe { dot_avx(c, x, y) };
+    }
+    dot(c, x, y)
 }
 
 /// (Σ c_k x_k, Σ c_k y_k) over c's length, in the order of the module docs.
