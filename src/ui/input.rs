@@ -3,8 +3,9 @@
 use super::actions::{redo, reset, save, undo};
 use super::controls::HelpOverlay;
 use super::edit;
+use super::events::KeyPresses;
 use super::pick::Picking;
-use super::pointer::{Cursor, modifiers};
+use super::pointer::Cursor;
 use super::view::{CanvasView, scene_box};
 use crate::scene::CurrentScene;
 use crate::sim::*;
@@ -16,10 +17,14 @@ type ParticleOrSpring = Or<(With<Particle>, With<Spring>)>;
 
 /// G / Space: pause or resume. N: one step while paused. R: reset. S: save. C: clear. F: fit.
 /// H / ?: help. Ctrl+Z, Ctrl+Shift+Z, Ctrl+Y: undo, redo.
+///
+/// Every press counts, in the order it was made ([`KeyPresses`]): a quick double ctrl+Z
+/// undoes twice, G G in one frame pauses and resumes. Undo and redo follow the system's key
+/// repeat while held; the others take only real presses.
 #[allow(clippy::too_many_arguments)]
 pub fn keyboard(
     mut commands: Commands,
-    keys: Res<ButtonInput<KeyCode>>,
+    presses: Res<KeyPresses>,
     egui: Res<EguiWantsInput>,
     mut params: ResMut<SimParams>,
     mut view: ResMut<CanvasView>,
@@ -30,40 +35,38 @@ pub fn keyboard(
     if egui.wants_any_keyboard_input() {
         return;
     }
-    let (shift, ctrl) = modifiers(&keys);
-    let pressed = |k: KeyCode| keys.just_pressed(k);
-    if ctrl {
-        if pressed(KeyCode::KeyZ) && !shift {
-            commands.queue(undo);
-        } else if pressed(KeyCode::KeyZ) || pressed(KeyCode::KeyY) {
-            commands.queue(redo);
+    let mut cleared = false;
+    for press in &presses.0 {
+        if press.ctrl {
+            match press.key {
+                KeyCode::KeyZ if !press.shift => commands.queue(undo),
+                KeyCode::KeyZ | KeyCode::KeyY => commands.queue(redo),
+                _ => {}
+            }
+            continue;
         }
-        return;
-    }
-    if pressed(KeyCode::KeyG) || pressed(KeyCode::Space) {
-        params.paused = !params.paused;
-    }
-    if pressed(KeyCode::KeyN) && params.paused {
-        commands.queue(|world: &mut World| {
-            world.resource_mut::<SimParams>().paused = false;
-            advance(world, 1);
-            world.resource_mut::<SimParams>().paused = true;
-        });
-    }
-    if pressed(KeyCode::KeyR) {
-        commands.queue(reset);
-    }
-    if pressed(KeyCode::KeyS) {
-        commands.queue(save);
-    }
-    if pressed(KeyCode::KeyC) && !everything.is_empty() {
-        edit::clear(&mut commands, everything.iter());
-    }
-    if pressed(KeyCode::KeyF) {
-        view.fit = Some(scene_box(&solver.x));
-    }
-    if pressed(KeyCode::KeyH) || (pressed(KeyCode::Slash) && shift) {
-        help.0 = !help.0;
+        if press.repeat {
+            continue;
+        }
+        match press.key {
+            KeyCode::KeyG | KeyCode::Space => params.paused = !params.paused,
+            KeyCode::KeyN if params.paused => commands.queue(|world: &mut World| {
+                world.resource_mut::<SimParams>().paused = false;
+                advance(world, 1);
+                world.resource_mut::<SimParams>().paused = true;
+            }),
+            KeyCode::KeyR => commands.queue(reset),
+            KeyCode::KeyS => commands.queue(save),
+            // Once a frame: the query still lists what the first clear removes.
+            KeyCode::KeyC if !cleared && !everything.is_empty() => {
+                edit::clear(&mut commands, everything.iter());
+                cleared = true;
+            }
+            KeyCode::KeyF => view.fit = Some(scene_box(&solver.x)),
+            KeyCode::KeyH => help.0 = !help.0,
+            KeyCode::Slash if press.shift => help.0 = !help.0,
+            _ => {}
+        }
     }
 }
 
@@ -71,7 +74,7 @@ pub fn keyboard(
 #[allow(clippy::too_many_arguments)]
 pub fn particle_keys(
     mut commands: Commands,
-    keys: Res<ButtonInput<KeyCode>>,
+    presses: Res<KeyPresses>,
     egui: Res<EguiWantsInput>,
     cursor: Cursor,
     scene: Option<Res<CurrentScene>>,
@@ -80,9 +83,15 @@ pub fn particle_keys(
     pinned: Query<Has<Pinned>, With<Particle>>,
     springs: Query<(Entity, &Spring)>,
 ) {
-    let pin = keys.just_pressed(KeyCode::KeyP);
-    let delete = keys.any_just_pressed([KeyCode::KeyX, KeyCode::Delete]);
-    if !(pin || delete) || egui.wants_any_keyboard_input() || modifiers(&keys).1 {
+    // The first such press of the frame: the particle under the cursor is picked from the
+    // frame's positions, which a second edit in the same frame would not see change.
+    let first = presses.0.iter().find(|p| {
+        !p.ctrl && !p.repeat && matches!(p.key, KeyCode::KeyP | KeyCode::KeyX | KeyCode::Delete)
+    });
+    let Some(press) = first else {
+        return;
+    };
+    if egui.wants_any_keyboard_input() {
         return;
     }
     let Some(at) = cursor.on_canvas() else {
@@ -98,7 +107,7 @@ pub fn particle_keys(
     let Ok(is_pinned) = pinned.get(particle) else {
         return;
     };
-    if pin {
+    if press.key == KeyCode::KeyP {
         edit::toggle_pin(&mut commands, particle, is_pinned);
     } else {
         edit::delete_particle(&mut commands, particle, springs);

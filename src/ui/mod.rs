@@ -48,6 +48,7 @@ impl Plugin for AppPlugin {
             .init_resource::<pick::Picking>()
             .init_resource::<pointer::Gesture>()
             .init_resource::<events::PressedAt>()
+            .init_resource::<events::KeyPresses>()
             .init_resource::<controls::HelpOverlay>()
             .init_resource::<plots::Timeline>()
             .init_resource::<crate::sim::watch::EnergyWatch>()

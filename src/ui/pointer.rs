@@ -82,9 +82,10 @@ impl Cursor<'_, '_> {
     }
 }
 
-/// Shift and ctrl: down at any time during this frame (held, pressed or released in it). A
-/// quick ctrl+Z can press and release ctrl within one frame, or release it in the frame that
-/// brings the Z.
+/// Shift and ctrl for a mouse gesture: down at any time during this frame (held, pressed or
+/// released in it). A quick shift+click can press and release shift within one frame, or
+/// release it in the frame that brings the click. (Key chords read [`super::events::KeyPresses`],
+/// which keeps each key's own modifiers.)
 pub fn modifiers(keys: &ButtonInput<KeyCode>) -> (bool, bool) {
     let held = |pair: [KeyCode; 2]| {
         keys.any_pressed(pair) || keys.any_just_pressed(pair) || keys.any_just_released(pair)
