@@ -369,7 +369,7 @@ fn integrate(
         // Only when memory runs out: with m > 0 and k >= 0 (checked) projective dynamics'
         // M + h²L is positive definite. The step is refused like a blow-up, which pauses with
         // the last good state.
-        error!("hooke: {e}");
+        tracing::error!("hooke: {e}");
         s.state.non_finite = true;
     }
     n.integrate += 1;
@@ -539,7 +539,7 @@ pub fn pack(world: &mut World) -> Result<(), String> {
 fn sync_tick(world: &mut World) {
     if let Err(e) = pack(world) {
         // Only when the world lacks the plugin's resources, which the plugin inserts.
-        error!("hooke: {e}");
+        tracing::error!("hooke: {e}");
     }
 }
 
