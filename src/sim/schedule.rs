@@ -73,7 +73,8 @@ pub enum StepSystems {
     Integrate,
     /// 3. v *= exp(-μ dt).
     Damping,
-    /// 4. Ground contact on the start-of-step position.
+    /// 4. Ground contact on the start-of-step position (implicit Euler and projective
+    ///    dynamics: on the end-of-step position, see [`crate::solver::Contact`]).
     Ground,
     /// 5. The position update, x += dt u, with u the integrator's drift velocity; checks
     ///    finiteness.
@@ -392,7 +393,8 @@ fn ground_contact(
     mut n: ResMut<PassCounts>,
 ) {
     let Some(ground) = params.ground else { return };
-    step::ground(&mut solver.state, ground, &threads);
+    let (integrator, dt) = (params.integrator, params.dt);
+    step::ground(&mut solver.state, integrator, dt, ground, &threads);
     n.ground += 1;
 }
 

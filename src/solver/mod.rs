@@ -33,7 +33,7 @@ pub(crate) mod wide;
 pub(crate) mod xpbd;
 
 pub use integrators::CgSettings;
-pub use kernels::{Motion, Sweep};
+pub use kernels::{Contact, Motion, Sweep};
 pub use method::{Integrator, Iterations};
 pub use parallel::{PARALLEL_MIN_SPRINGS, Threads};
 pub use stability::StabilityEstimate;
