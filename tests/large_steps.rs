@@ -426,14 +426,19 @@ fn the_direct_minimiser_finds_the_hanging_chains_static_shape() {
     assert_eq!(eq[0], start[0], "the pinned particle stays");
 }
 
-/// At a real-time step the implicit methods end every step on or above the ground: the cloth32
-/// falls onto it at dt = 1/30 s, and after each step no free particle is below y = 0 (tested
-/// on the start-of-step position, as the explicit methods do, they ended steps 1–2 cm under
-/// it); those on the ground are at rest vertically. The same holds with the ground raised.
+/// At a real-time step the large-step methods end every step on or above the ground: the
+/// cloth32 falls onto it at dt = 1/30 s, and after each step no free particle is below it. The
+/// implicit methods tested the start-of-step position, as the explicit methods do, and ended
+/// steps 1–2 cm under it; XPBD's sweeps pulled its bottom row 0.75 mm under. Particles the
+/// implicit methods put on the ground are at rest vertically. The same with the ground raised.
 #[test]
-fn implicit_methods_end_every_large_step_on_or_above_the_ground() {
+fn large_step_methods_end_every_step_on_or_above_the_ground() {
     let cloth = hooke::scene::presets::resolve("cloth32").unwrap().scene;
-    for integrator in [Integrator::ImplicitEuler, Integrator::ProjectiveDynamics] {
+    for integrator in [
+        Integrator::ImplicitEuler,
+        Integrator::ProjectiveDynamics,
+        Integrator::Xpbd,
+    ] {
         for ground in [0.0, 0.25] {
             let mut scene = cloth.clone();
             scene.integrator = integrator;
@@ -452,10 +457,12 @@ fn implicit_methods_end_every_large_step_on_or_above_the_ground() {
                     );
                     if x.y == ground && i >= 32 {
                         touching += 1;
-                        assert!(
-                            v.y >= 0.0,
-                            "{integrator}: particle {i} on the ground, v {v}"
-                        );
+                        if integrator != Integrator::Xpbd {
+                            assert!(
+                                v.y >= 0.0,
+                                "{integrator}: particle {i} on the ground, v {v}"
+                            );
+                        }
                     }
                 }
             }
