@@ -516,6 +516,15 @@ fn every_control_works_under_real_input_and_the_log_stays_quiet() {
     s.x(&["keydown", "shift", "click", "1", "keyup", "shift"]);
     s.expect("a pinned particle", |st| counts(st) == (4, 3, 2));
 
+    // A press on empty canvas that turns into a drag is no click: it adds nothing.
+    s.drag("1", (0.85, 0.85), (0.95, 0.6), 6);
+    let st = s.expect("a drag from empty canvas over", |st| st["held"] == 0);
+    assert_eq!(
+        counts(&st),
+        (4, 3, 2),
+        "a drag from empty canvas adds nothing"
+    );
+
     // A press on a particle grabs it (adds nothing); the drag ends at the cursor (paused).
     s.drag("1", (0.6, 0.8), (0.7, 0.6), 8);
     let st = s.expect("the dragged particle at the cursor", |st| {

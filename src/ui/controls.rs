@@ -11,7 +11,7 @@ pub const CONTROLS: &[(&str, &str)] = &[
     ),
     (
         "left click on empty canvas",
-        "add a particle, joined to those within the click radius",
+        "add a particle, joined to those within the click radius (a drag adds none)",
     ),
     ("shift + left click", "add a pinned particle"),
     ("right button held", "attract particles within the circle"),

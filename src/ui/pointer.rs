@@ -12,7 +12,7 @@ use super::edit;
 use super::events::PressedAt;
 use super::pick::Picking;
 use super::view::CanvasView;
-use crate::scene::CurrentScene;
+use crate::scene::{ClickRules, CurrentScene};
 use crate::sim::*;
 use bevy::ecs::entity::{Entities, EntityHashSet};
 use bevy::ecs::system::SystemParam;
@@ -23,6 +23,11 @@ use bevy_egui::input::EguiWantsInput;
 
 /// How close, in logical pixels, a press must be to a particle to pick it.
 pub const PICK_PX: f32 = 10.0;
+/// How far, in logical pixels, the cursor may move between press and release for a press on
+/// empty canvas to count as a click that adds a particle. A press inside a cloth that misses
+/// every particle and drags on (an attempt to grab it) would otherwise add a particle joined
+/// to every particle within the click radius.
+pub const CLICK_SLOP_PX: f32 = 5.0;
 /// Time constant of the grabbed particle's velocity estimate, s.
 const VELOCITY_SMOOTHING: f64 = 0.04;
 
@@ -39,6 +44,12 @@ pub enum Gesture {
     Cut {
         last: DVec2,
         cut: EntityHashSet,
+    },
+    /// A press on empty canvas: a particle is added there if the button comes up within
+    /// [`CLICK_SLOP_PX`] of it (a click), and nothing if the press turns into a drag.
+    Add {
+        at: DVec2,
+        pinned: bool,
     },
 }
 
@@ -80,6 +91,11 @@ impl Cursor<'_, '_> {
     pub fn pick_radius(&self) -> f64 {
         PICK_PX as f64 * self.view.pixel()
     }
+
+    /// [`CLICK_SLOP_PX`] in metres.
+    pub fn click_slop(&self) -> f64 {
+        CLICK_SLOP_PX as f64 * self.view.pixel()
+    }
 }
 
 /// Shift and ctrl for a mouse gesture: down at any time during this frame (held, pressed or
@@ -95,7 +111,8 @@ pub fn modifiers(keys: &ButtonInput<KeyCode>) -> (bool, bool) {
     (shift, ctrl)
 }
 
-/// Left press: cut (ctrl), grab (on a particle) or add (elsewhere; shift pins it).
+/// Left press: cut (ctrl), grab (on a particle), or on empty canvas the start of a click that
+/// adds a particle when the button comes up ([`drag`]; shift pins it).
 #[allow(clippy::too_many_arguments)]
 pub fn press(
     mut commands: Commands,
@@ -103,7 +120,6 @@ pub fn press(
     keys: Res<ButtonInput<KeyCode>>,
     cursor: Cursor,
     scene: Option<Res<CurrentScene>>,
-    params: Res<SimParams>,
     solver: Res<Solver>,
     mut picking: ResMut<Picking>,
     mut gesture: ResMut<Gesture>,
@@ -122,8 +138,7 @@ pub fn press(
         };
         return;
     }
-    let rules = scene.and_then(|s| s.0.scene.click).unwrap_or_default();
-    let cell = rules.radius;
+    let cell = click_rules(&scene).radius;
     if let Some(particle) = picking.nearest(&solver, at, cursor.pick_radius(), cell) {
         commands.queue(super::history::before("grab"));
         commands.entity(particle).insert(Kinematic);
@@ -134,21 +149,44 @@ pub fn press(
         };
         return;
     }
-    let neighbours = picking.within(&solver, at, rules.radius, cell);
+    *gesture = Gesture::Add { at, pinned: shift };
+}
+
+/// The scene's click rules (radius, stiffness, mass, first pinned), or the assignment's.
+fn click_rules(scene: &Option<Res<CurrentScene>>) -> ClickRules {
+    scene
+        .as_ref()
+        .and_then(|s| s.0.scene.click)
+        .unwrap_or_default()
+}
+
+/// Adds a particle at `at`, joined to every particle within the click radius.
+fn add_at(
+    commands: &mut Commands,
+    at: DVec2,
+    shift: bool,
+    rules: &ClickRules,
+    params: &SimParams,
+    solver: &Res<Solver>,
+    picking: &mut Picking,
+) {
+    let cell = rules.radius;
+    let neighbours = picking.within(solver, at, rules.radius, cell);
     let pinned =
         shift || (rules.pin_first && solver.particle_count() == 0 && neighbours.is_empty());
     let stiffness = params.stiffness_override.unwrap_or(rules.stiffness);
-    let new = edit::add_particle(&mut commands, at, pinned, &rules, stiffness, &neighbours);
-    picking.note_added(&solver, at, new, cell);
+    let new = edit::add_particle(commands, at, pinned, rules, stiffness, &neighbours);
+    picking.note_added(solver, at, new, cell);
 }
 
 /// While the left button is held: the grabbed particle follows the cursor, or the cut goes on
-/// along its path. Release ends the gesture.
+/// along its path. Release ends the gesture, and completes a click on empty canvas.
 #[allow(clippy::too_many_arguments)]
 pub fn drag(
     mut commands: Commands,
     buttons: Res<ButtonInput<MouseButton>>,
     cursor: Cursor,
+    scene: Option<Res<CurrentScene>>,
     time: Res<Time<Real>>,
     params: Res<SimParams>,
     solver: Res<Solver>,
@@ -162,6 +200,28 @@ pub fn drag(
     let at = cursor.world();
     match &mut *gesture {
         Gesture::None => {}
+        &mut Gesture::Add {
+            at: pressed,
+            pinned,
+        } => {
+            // Where the button came up: the cursor now (a frame can bring press and release).
+            let moved = at.is_none_or(|at| at.distance(pressed) > cursor.click_slop());
+            if moved {
+                *gesture = Gesture::None;
+            } else if !held {
+                let rules = click_rules(&scene);
+                add_at(
+                    &mut commands,
+                    pressed,
+                    pinned,
+                    &rules,
+                    &params,
+                    &solver,
+                    &mut picking,
+                );
+                *gesture = Gesture::None;
+            }
+        }
         Gesture::Grab {
             particle,
             last,
