@@ -242,6 +242,16 @@ pub fn side_panel(
                         .suffix(" s"),
                 );
                 ui.end_row();
+                if let Some(dt) = large_step_suggestion(p.integrator, p.dt) {
+                    ui.label("");
+                    ui.horizontal(|ui| {
+                        ui.small("made for large steps:");
+                        if ui.small_button("use 1/60 s").clicked() {
+                            p.dt = dt;
+                        }
+                    });
+                    ui.end_row();
+                }
 
                 ui.label("Ground");
                 let mut ground = p.ground.is_some();
@@ -387,6 +397,14 @@ const RED: egui::Color32 = egui::Color32::from_rgb(255, 110, 90);
 const AMBER: egui::Color32 = egui::Color32::from_rgb(240, 190, 70);
 const GREEN: egui::Color32 = egui::Color32::from_rgb(140, 200, 140);
 
+/// The step to offer when a method made for large steps (stable at any dt) runs at a step the
+/// explicit methods could take: picked from the combo box, it keeps the scene's dt (1e-4 s in
+/// the assignment's scenes) and runs a big cloth in slow motion for no gain in stability.
+fn large_step_suggestion(integrator: Integrator, dt: f64) -> Option<f64> {
+    const FRAME: f64 = 1.0 / 60.0;
+    (integrator.unconditionally_stable() && dt < FRAME / 4.0).then_some(FRAME)
+}
+
 /// h·ω_max against the integrator's limit: green below 80 %, amber below 100 %, red past it.
 fn stability_readout(ui: &mut egui::Ui, s: &StabilityEstimate, integrator: Integrator) {
     let margin = s.margin();
@@ -470,4 +488,23 @@ fn accuracy_readout(ui: &mut egui::Ui, integrator: Integrator, dt: f64, particle
     };
     ui.label("Accuracy");
     ui.small(text);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Offered to the large-step methods at small steps only, never to the explicit ones.
+    #[test]
+    fn a_real_time_step_is_offered_to_the_large_step_methods_only() {
+        for i in Integrator::ALL {
+            let offered = large_step_suggestion(i, 1e-4);
+            assert_eq!(offered.is_some(), i.unconditionally_stable(), "{i}");
+            assert_eq!(large_step_suggestion(i, 1.0 / 60.0), None, "{i}");
+        }
+        assert_eq!(
+            large_step_suggestion(Integrator::Xpbd, 1e-3),
+            Some(1.0 / 60.0)
+        );
+    }
 }
