@@ -68,10 +68,7 @@ pub fn ground_contact(
     contact: Contact,
 ) {
     for ((x, v), &w) in x.iter_mut().zip(v).zip(inv_mass) {
-        if w != 0.0 && contact.height(*x, *v) < ground {
-            x.y = ground;
-            v.y = 0.0;
-        }
+        contact.apply(x, v, w, ground);
     }
 }
 
@@ -104,6 +101,17 @@ impl Contact {
         match self {
             Contact::Start => x.y,
             Contact::End { dt } => (x + v * dt).y,
+        }
+    }
+
+    /// The contact rule on one particle: a free one whose tested height is below the ground is
+    /// put on it and its vertical velocity zeroed (what the ground pass,
+    /// [`super::step::ground`], and the particle sweep both do).
+    #[inline(always)]
+    pub fn apply(self, x: &mut DVec2, v: &mut DVec2, w: f64, ground: f64) {
+        if w != 0.0 && self.height(*x, *v) < ground {
+            x.y = ground;
+            v.y = 0.0;
         }
     }
 }
@@ -140,6 +148,16 @@ impl Motion {
     /// Whether the step's velocity update is the Euler kick (run in the sweep or the kick pass).
     pub fn kicks(self) -> bool {
         matches!(self, Motion::ExplicitEuler | Motion::SymplecticEuler)
+    }
+
+    /// Which position the ground test reads: where the step ends for the methods that move
+    /// with their end velocity (implicit Euler, projective dynamics: their large steps would
+    /// otherwise end below the ground), the start of the step for the others ([`Contact`]).
+    pub fn contact(self, dt: f64) -> Contact {
+        match self {
+            Motion::EndVelocity => Contact::End { dt },
+            _ => Contact::Start,
+        }
     }
 }
 
@@ -186,6 +204,7 @@ pub fn particle_sweep((x, v, f, inv_mass, drift): SweepArrays, dt: f64, sweep: S
         Motion::Drift => DRIFT,
     };
     let (decay, ground) = (sweep.decay.unwrap_or(1.0), sweep.ground.unwrap_or(0.0));
+    let ground = (ground, sweep.motion.contact(dt));
     let a = (x, v, f, inv_mass, drift);
     macro_rules! dispatch {
         ($($m:ident),+) => {
@@ -209,7 +228,7 @@ fn sweep_kernel<const MOTION: u8, const DAMP: bool, const GROUND: bool>(
     (x, v, f, inv_mass, drift): SweepArrays,
     dt: f64,
     decay: f64,
-    ground: f64,
+    (ground, contact): (f64, Contact),
 ) -> bool {
     let kick = MOTION <= 1;
     let mut probe = DVec2::ZERO;
@@ -221,16 +240,8 @@ fn sweep_kernel<const MOTION: u8, const DAMP: bool, const GROUND: bool>(
         if DAMP {
             *v *= decay;
         }
-        if GROUND && w != 0.0 {
-            let contact = if MOTION == 2 {
-                Contact::End { dt }
-            } else {
-                Contact::Start
-            };
-            if contact.height(*x, *v) < ground {
-                x.y = ground;
-                v.y = 0.0;
-            }
+        if GROUND {
+            contact.apply(x, v, w, ground);
         }
         let u = match MOTION {
             0 => before,

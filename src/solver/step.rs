@@ -25,8 +25,8 @@
 //! 4. **Ground** ([`ground`]): a free particle below the ground is put on it and its vertical
 //!    velocity zeroed, when the scene has a ground. The test reads the start-of-step position,
 //!    except for implicit Euler and projective dynamics, which read where the step will end,
-//!    x + dt v ([`Contact`]): at their large steps a particle would otherwise end each step
-//!    dt·|v_y| under the ground.
+//!    x + dt v ([`super::Contact`]): at their large steps a particle would otherwise end each
+//!    step dt·|v_y| under the ground.
 //! 5. **Advance** ([`advance`]): x += dt u (u = v for symplectic and implicit Euler and
 //!    projective dynamics, the start-of-step v for explicit Euler, the drift for the others),
 //!    and a check that everything stayed finite.
@@ -39,7 +39,7 @@
 //! the thread pool ([`Threads`]); none knows who owns the particles.
 
 use super::integrators::{self, CgSettings, Scratch};
-use super::kernels::{self, Contact, Motion, Sweep};
+use super::kernels::{self, Motion, Sweep};
 use super::method::{Integrator, Iterations};
 use super::parallel::Threads;
 use super::projective::{self, Projective};
@@ -209,23 +209,13 @@ pub fn damp(s: &mut State, damping: f64, dt: f64, threads: &Threads) {
 
 /// Pass 4: ground contact, on the start-of-step position or, for the methods that end the step
 /// with their end velocity, on where the position update will put the particle
-/// ([`contact`]).
+/// ([`Motion::contact`]).
 pub fn ground(s: &mut State, integrator: Integrator, dt: f64, ground: f64, threads: &Threads) {
     let data = (&mut s.x[..], &mut s.v[..], &s.inv_mass[..]);
-    let contact = contact(integrator, dt);
+    let contact = motion(integrator).contact(dt);
     threads.each(s.springs.len(), data, |(x, v, w)| {
         kernels::ground_contact(x, v, w, ground, contact)
     });
-}
-
-/// Which position an integrator's ground test reads: the end of the step for implicit Euler
-/// and projective dynamics (their large steps would otherwise end below the ground), the start
-/// for the others (see [`Contact`]).
-pub fn contact(integrator: Integrator, dt: f64) -> Contact {
-    match motion(integrator) {
-        Motion::EndVelocity => Contact::End { dt },
-        _ => Contact::Start,
-    }
 }
 
 /// How an integrator's step ends: with the Euler kick or without, and which velocity moves the
