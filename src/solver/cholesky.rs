@@ -7,11 +7,15 @@
 //! slower on these factors (thousands of supernodes, most of them a few columns wide).
 //!
 //! A supernode is a run of columns with one shared pattern below its diagonal block, stored as
-//! one dense column-major block. Per supernode, the forward substitution solves the diagonal
-//! block, then sums the block's updates to the rows below in a contiguous buffer and scatters
-//! them once; the back substitution gathers those rows once, takes each column's dot product
-//! with them, and then solves the diagonal block from its last column ([`super::supernode`]
-//! has the dense kernels, portable and AVX, with the same bits).
+//! one dense column-major block. [`Factor::finish`] rewrites each block as the inverse of its
+//! diagonal block over W = L_B L_D⁻¹ ([`super::supernode::invert`]), so that a supernode's
+//! share of either substitution is one dense product with no column waiting on another: the
+//! forward substitution multiplies the block by the supernode's right-hand side, keeps the top
+//! rows as its solution and scatters the rest to the rows below once; the back substitution
+//! gathers those rows once and takes each column's dot product with them and the supernode's
+//! own values ([`super::supernode`] has the dense kernels, portable and AVX, with the same
+//! bits). Solving through the triangles instead, column by column, took about twice as long a
+//! value on the 4–15-column supernodes that hold half of the 256² cloth's factor.
 //!
 //! What bounds a solve is memory: the 256² cloth's factor has 3.5 M values, and a solve reads
 //! each twice. Two things halve and hide that traffic:
@@ -27,7 +31,7 @@
 
 use super::etree::TreeSplit;
 use super::parallel::Threads;
-use super::supernode::{Block, Value};
+use super::supernode::{Block, Value, invert};
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 
 /// The factor L: supernode s spans columns `begin[s]..begin[s + 1]`; its values are a dense
@@ -45,9 +49,6 @@ pub struct Factor {
     /// The blocks' values rounded to f32, which the substitutions read instead of [`Self::l`]
     /// when the matrix is well enough conditioned ([`Self::finish`]).
     single: Vec<f32>,
-    /// 1 / L_jj for every column j ([`Self::finish`]): a substitution multiplies by it,
-    /// because a division on each column's critical path would cost its latency per column.
-    inv_diagonal: Vec<f64>,
     /// The two halves that a solve runs at once, if the tree splits well.
     split: Option<TreeSplit>,
 }
@@ -117,7 +118,6 @@ impl Factor {
                     row,
                     l: vec![0.0; symbolic.len_val()],
                     single: vec![],
-                    inv_diagonal: vec![],
                 });
             }
         };
@@ -145,7 +145,6 @@ impl Factor {
             row,
             l: vec![0.0; symbolic.len_val()],
             single: vec![],
-            inv_diagonal: vec![],
         })
     }
 
@@ -156,13 +155,16 @@ impl Factor {
     /// convergence by a little and leaves its fixed point where it was: see
     /// [`super::projective`].)
     pub fn finish(&mut self, single: bool) {
-        let n = self.supernodes();
-        let mut inv = Vec::with_capacity(self.begin[n]);
-        for s in 0..n {
-            let (_, _, _, b) = self.supernode::<f64>(s);
-            inv.extend((0..b.cols).map(|j| 1.0 / b.values[j * b.rows + j]));
+        for s in 0..self.supernodes() {
+            let (start, end) = (self.begin[s], self.begin[s + 1]);
+            let rows = end - start + self.pattern[s + 1] - self.pattern[s];
+            let at = self.values[s];
+            invert(
+                &mut self.l[at..at + rows * (end - start)],
+                rows,
+                end - start,
+            );
         }
-        self.inv_diagonal = inv;
         if single {
             self.single = self.l.iter().map(|&v| v as f32).collect();
             self.l = Vec::new();
@@ -272,6 +274,11 @@ impl Factor {
         self.begin.len() - 1
     }
 
+    /// The factor's supernodes (0 for an empty factor).
+    pub fn supernode_count(&self) -> usize {
+        self.begin.len().saturating_sub(1)
+    }
+
     /// L v = b over `supernodes` (ascending), within `span`; updates of rows with a `shared`
     /// slot are summed there instead.
     fn forward<T: Stored>(
@@ -354,10 +361,11 @@ impl Factor {
             ahead.forward(T::of(self), self.values[s] + block.values.len());
             let (lo, x, y) = (span.lo, &mut *span.x, &mut *span.y);
             let (xs, ys) = (&mut x[start - lo..end - lo], &mut y[start - lo..end - lo]);
-            block.solve_diagonal_forward(&self.inv_diagonal[start..end], xs, ys);
-            let (bx, by) = below.rows(pattern.len());
-            block.product_below::<AVX>(xs, ys, bx, by);
-            let (bx, by) = (&*bx, &*by);
+            let (bx, by) = below.rows(block.rows);
+            block.product::<AVX>(xs, ys, bx, by);
+            let ((ux, bx), (uy, by)) = (bx.split_at(block.cols), by.split_at(block.cols));
+            xs.copy_from_slice(ux);
+            ys.copy_from_slice(uy);
             // The rows below in this span, then (in a half) the shared rows, which come last.
             let from = shared
                 .as_ref()
@@ -391,10 +399,16 @@ impl Factor {
             let (start, end, pattern, block) = self.supernode::<T>(s);
             ahead.backward(T::of(self), self.values[s]);
             let (lo, x, y) = (span.lo, &mut *span.x, &mut *span.y);
-            let (bx, by) = below.rows(pattern.len());
+            let (bx, by) = below.rows(block.rows);
+            let ((ux, bx), (uy, by)) = (bx.split_at_mut(block.cols), by.split_at_mut(block.cols));
+            let (xs, ys) = (&mut x[start - lo..end - lo], &mut y[start - lo..end - lo]);
+            ux.copy_from_slice(xs);
+            uy.copy_from_slice(ys);
+            // The solution at the pattern rows, negated: in this span, then (in a half) the
+            // shared rows.
             let from = shared.map_or(pattern.len(), |(split, _)| split.shared_from[s] as usize);
             for ((&r, u), w) in pattern[..from].iter().zip(&mut *bx).zip(&mut *by) {
-                (*u, *w) = (x[r as usize - lo], y[r as usize - lo]);
+                (*u, *w) = (-x[r as usize - lo], -y[r as usize - lo]);
             }
             if let Some((split, top)) = shared {
                 let rows = pattern[from..]
@@ -403,12 +417,12 @@ impl Factor {
                     .zip(&mut by[from..]);
                 for ((&r, u), w) in rows {
                     let q = split.slot[r as usize] as usize;
-                    (*u, *w) = (top.x[q], top.y[q]);
+                    (*u, *w) = (-top.x[q], -top.y[q]);
                 }
             }
+            let (bx, by) = below.rows(block.rows);
             let (xs, ys) = (&mut x[start - lo..end - lo], &mut y[start - lo..end - lo]);
-            block.subtract_pattern_dots::<AVX>(bx, by, xs, ys);
-            block.solve_diagonal_backward::<AVX>(&self.inv_diagonal[start..end], xs, ys);
+            block.dots::<AVX>(bx, by, xs, ys);
         }
     }
 
@@ -556,14 +570,35 @@ mod tests {
         t: &[Triplet<usize, usize, f64>],
         single: bool,
     ) -> (Factor, SymbolicCholesky<usize>) {
+        factor_in_order(n, t, single, None)
+    }
+
+    /// The factor of the matrix `t` (n × n) in the order `forward` (row p of the factor is row
+    /// `forward[p]`), or faer's minimum degree order.
+    fn factor_in_order(
+        n: usize,
+        t: &[Triplet<usize, usize, f64>],
+        single: bool,
+        forward: Option<&[usize]>,
+    ) -> (Factor, SymbolicCholesky<usize>) {
         let a = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, t).unwrap();
         let params = CholeskySymbolicParams {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
             ..Default::default()
         };
+        let perm = forward.map(|forward| {
+            let mut inverse = vec![0usize; n];
+            for (p, &r) in forward.iter().enumerate() {
+                inverse[r] = p;
+            }
+            faer::perm::Perm::new_checked(forward.into(), inverse.into_boxed_slice(), n)
+        });
+        let ordering = match &perm {
+            Some(p) => faer::sparse::linalg::cholesky::SymmetricOrdering::Custom(p.as_ref()),
+            None => Default::default(),
+        };
         let symbolic =
-            factorize_symbolic_cholesky(a.symbolic(), Side::Lower, Default::default(), params)
-                .unwrap();
+            factorize_symbolic_cholesky(a.symbolic(), Side::Lower, ordering, params).unwrap();
         let mut f = Factor::of(&symbolic).unwrap();
         let par = faer::Par::Seq;
         let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
@@ -585,7 +620,8 @@ mod tests {
 
     /// Figures, no assertion on time: a solve of the 256² grid's factor on 1 and 2 threads
     /// against one plain read of its values, which bounds what any substitution can cost, and
-    /// each pass over the supernodes of each width alone (`W=180` for another grid:
+    /// each pass over the supernodes of each width alone, and the solve in the two fill orders
+    /// projective dynamics chooses from (`W=180` for another grid:
     /// `cargo test --release --lib substitutions_against -- --ignored --nocapture`).
     #[test]
     #[ignore = "a measurement: prints figures"]
@@ -662,6 +698,47 @@ mod tests {
                 pick.len(),
                 fw * 1e6 / values as f64,
                 bw * 1e6 / values as f64
+            );
+        }
+        // The two fill orders projective dynamics chooses from, timed in alternating rounds
+        // (the best of each, as this VM's timing noise is one-sided).
+        let position: Vec<glam::DVec2> = (0..n)
+            .map(|r| glam::DVec2::new((r % w) as f64, (r / w) as f64))
+            .collect();
+        let (start, neighbours) =
+            crate::solver::ordering::adjacency(n, t.iter().map(|e| (e.row, e.col)));
+        let dissection: Vec<usize> =
+            crate::solver::ordering::nested_dissection(&position, &start, &neighbours)
+                .into_iter()
+                .map(|r| r as usize)
+                .collect();
+        let orders = [
+            ("minimum degree", factor(n, &t, true).0),
+            (
+                "nested dissection",
+                factor_in_order(n, &t, true, Some(&dissection)).0,
+            ),
+        ];
+        let pools = [Threads::new(1).unwrap(), Threads::new(2).unwrap()];
+        let mut best = [[f64::INFINITY; 2]; 2];
+        for _ in 0..15 {
+            for (k, (_, f)) in orders.iter().enumerate() {
+                for (q, pool) in pools.iter().enumerate() {
+                    let mut work = Substitution::default();
+                    let ms = time(&mut || {
+                        x.fill(1.0);
+                        y.fill(0.5);
+                        f.solve(&mut x, &mut y, &mut work, pool);
+                    });
+                    best[k][q] = best[k][q].min(ms);
+                }
+            }
+        }
+        for ((name, f), [one, two]) in orders.iter().zip(best) {
+            println!(
+                "{name}: {} values, {} supernodes; best solve on 1 thread {one:.2} ms, on 2 {two:.2} ms",
+                f.len(),
+                f.supernode_count()
             );
         }
     }

@@ -42,7 +42,7 @@ use super::integrators::{self, CgSettings, Scratch};
 use super::kernels::{self, Motion, Sweep};
 use super::method::{Integrator, Iterations};
 use super::parallel::Threads;
-use super::projective::{self, Projective};
+use super::projective::{self, FactorOrder, Projective};
 use super::state::State;
 use super::xpbd::{self, Xpbd};
 use glam::DVec2;
@@ -81,6 +81,8 @@ impl Workspace {
             factorization_seconds: pd.factor_seconds,
             factor_nonzeros: pd.factor_nonzeros(),
             factor_bytes_per_value: pd.factor_bytes_per_value(),
+            factor_supernodes: pd.factor_supernodes(),
+            factor_order: pd.factor_order(),
             xpbd_sweeps_per_step: self.xpbd.sweeps_per_step(),
             xpbd_colours: self.xpbd.colours(),
         }
@@ -109,6 +111,13 @@ pub struct SolveStats {
     /// Projective dynamics: bytes per stored value of the factor, 4 (f32) or 8 (f64, for an
     /// ill-conditioned matrix); 0 before the first step.
     pub factor_bytes_per_value: usize,
+    /// Projective dynamics: supernodes (dense column blocks) of the last factor; a substitution
+    /// pays for each beyond its values.
+    pub factor_supernodes: usize,
+    /// Projective dynamics: the fill-reducing order of the last factor, the cheaper of
+    /// minimum degree and nested dissection for the substitutions.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub factor_order: Option<FactorOrder>,
     /// XPBD: constraint sweeps per time step (substeps × sweeps).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub xpbd_sweeps_per_step: Option<f64>,
