@@ -148,9 +148,10 @@ impl Factor {
         })
     }
 
-    /// Takes in the values that the numeric factorisation wrote to [`Self::l`]: the
-    /// diagonal's reciprocals in f64, and, if `single`, every value rounded to f32 for the
-    /// substitutions, which then read half the bytes. (Projective dynamics solves for the
+    /// Takes in the values that the numeric factorisation wrote to [`Self::l`]: rewrites each
+    /// supernode's block as its diagonal block's inverse over W (in f64, see the module docs)
+    /// and, if `single`, rounds every value to f32 for the substitutions, which then read half
+    /// the bytes. (Projective dynamics solves for the
     /// correction to its iterate, whose residual it computes in f64, so the rounding slows its
     /// convergence by a little and leaves its fixed point where it was: see
     /// [`super::projective`].)
@@ -270,12 +271,8 @@ impl Factor {
         self.single.len().max(self.l.len())
     }
 
-    fn supernodes(&self) -> usize {
-        self.begin.len() - 1
-    }
-
     /// The factor's supernodes (0 for an empty factor).
-    pub fn supernode_count(&self) -> usize {
+    pub fn supernodes(&self) -> usize {
         self.begin.len().saturating_sub(1)
     }
 
@@ -738,7 +735,7 @@ mod tests {
             println!(
                 "{name}: {} values, {} supernodes; best solve on 1 thread {one:.2} ms, on 2 {two:.2} ms",
                 f.len(),
-                f.supernode_count()
+                f.supernodes()
             );
         }
     }

@@ -310,7 +310,7 @@ impl Projective {
 
     /// Supernodes of the Cholesky factor (0 before the first step).
     pub fn factor_supernodes(&self) -> usize {
-        self.factor.supernode_count()
+        self.factor.supernodes()
     }
 
     /// The fill-reducing order of the factor in use (`None` before the first step).
