@@ -33,6 +33,7 @@ use super::etree::TreeSplit;
 use super::parallel::Threads;
 use super::supernode::{Block, Value, invert};
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
+use rayon::prelude::*;
 
 /// The factor L: supernode s spans columns `begin[s]..begin[s + 1]`; its values are a dense
 /// column-major block of (columns + pattern rows) × columns starting at `values[s]`, the
@@ -155,19 +156,27 @@ impl Factor {
     /// correction to its iterate, whose residual it computes in f64, so the rounding slows its
     /// convergence by a little and leaves its fixed point where it was: see
     /// [`super::projective`].)
-    pub fn finish(&mut self, single: bool) {
-        for s in 0..self.supernodes() {
-            let (start, end) = (self.begin[s], self.begin[s + 1]);
-            let rows = end - start + self.pattern[s + 1] - self.pattern[s];
-            let at = self.values[s];
-            invert(
-                &mut self.l[at..at + rows * (end - start)],
-                rows,
-                end - start,
-            );
+    pub fn finish(&mut self, single: bool, threads: &Threads, springs: usize) {
+        // Each supernode's block, apart, to invert on the pool's threads.
+        let n = self.supernodes();
+        let mut blocks = Vec::with_capacity(n);
+        let (mut rest, mut at) = (&mut self.l[..], 0);
+        for s in 0..n {
+            let cols = self.begin[s + 1] - self.begin[s];
+            let rows = cols + self.pattern[s + 1] - self.pattern[s];
+            let skip = self.values[s] - at;
+            let (block, after) = std::mem::take(&mut rest)[skip..].split_at_mut(rows * cols);
+            blocks.push((block, rows, cols));
+            (rest, at) = (after, self.values[s] + rows * cols);
         }
+        threads.run(springs, || {
+            blocks
+                .into_par_iter()
+                .for_each(|(block, rows, cols)| invert(block, rows, cols))
+        });
         if single {
-            self.single = self.l.iter().map(|&v| v as f32).collect();
+            let l = &self.l;
+            self.single = threads.run(springs, || l.par_iter().map(|&v| v as f32).collect());
             self.l = Vec::new();
         } else {
             self.single = Vec::new();
@@ -611,7 +620,7 @@ mod tests {
                 Default::default(),
             )
             .unwrap();
-        f.finish(single);
+        f.finish(single, &Threads::new(1).unwrap(), 0);
         (f, symbolic)
     }
 

@@ -233,15 +233,20 @@ impl<'a, T: Value> Block<'a, T> {
 /// root of the matrix's, and the solves it serves are corrections from an f64 residual.
 pub(super) fn invert(values: &mut [f64], rows: usize, cols: usize) {
     let at = |i: usize, j: usize| j * rows + i;
-    // L_D⁻¹, column j: solve L_D z = e_j (z_i = 0 for i < j).
+    // L_D⁻¹, column j: solve L_D z = e_j (z_i = 0 for i < j) by columns of L_D, each an
+    // update of the z below it that reads the column in address order.
     let mut inv = vec![0.0; cols * cols];
-    for j in 0..cols {
-        for i in j..cols {
-            let mut sum = if i == j { 1.0 } else { 0.0 };
-            for k in j..i {
-                sum -= values[at(i, k)] * inv[j * cols + k];
+    for (j, z) in inv.chunks_exact_mut(cols).enumerate() {
+        z[j] = 1.0;
+        for k in j..cols {
+            let zk = z[k] / values[at(k, k)];
+            z[k] = zk;
+            for (zi, &l) in z[k + 1..]
+                .iter_mut()
+                .zip(&values[at(k + 1, k)..at(cols, k)])
+            {
+                *zi -= l * zk;
             }
-            inv[j * cols + i] = sum / values[at(i, i)];
         }
     }
     // W = L_B L_D⁻¹: row r, column j sums L_B[r, k] L_D⁻¹[k, j] over k >= j.
