@@ -32,6 +32,7 @@
 use super::etree::TreeSplit;
 use super::parallel::Threads;
 use super::supernode::{Block, Value, invert};
+use faer::perm::Perm;
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 use rayon::prelude::*;
 
@@ -52,6 +53,17 @@ pub struct Factor {
     single: Vec<f32>,
     /// The two halves that a solve runs at once, if the tree splits well.
     split: Option<TreeSplit>,
+}
+
+/// The permutation that numbers row `forward[p]` of a matrix p (faer's forward array), for a
+/// custom fill-reducing order.
+pub fn permutation(forward: Vec<usize>) -> Perm<usize> {
+    let n = forward.len();
+    let mut inverse = vec![0; n];
+    for (p, &r) in forward.iter().enumerate() {
+        inverse[r] = p;
+    }
+    Perm::new_checked(forward.into_boxed_slice(), inverse.into_boxed_slice(), n)
 }
 
 /// Values for a supernode's pattern rows, or for the shared rows, x and y apart.
@@ -592,13 +604,7 @@ mod tests {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
             ..Default::default()
         };
-        let perm = forward.map(|forward| {
-            let mut inverse = vec![0usize; n];
-            for (p, &r) in forward.iter().enumerate() {
-                inverse[r] = p;
-            }
-            faer::perm::Perm::new_checked(forward.into(), inverse.into_boxed_slice(), n)
-        });
+        let perm = forward.map(|forward| permutation(forward.to_vec()));
         let ordering = match &perm {
             Some(p) => faer::sparse::linalg::cholesky::SymmetricOrdering::Custom(p.as_ref()),
             None => Default::default(),

@@ -30,7 +30,7 @@
 //! with v1 = (x1 − x0)/h; damping, ground contact and the position update follow as for
 //! implicit Euler.
 
-use super::cholesky::{Factor, Substitution};
+use super::cholesky::{Factor, Substitution, permutation};
 use super::ordering::{adjacency, nested_dissection};
 use super::parallel::{PairPass, SpringBuffers, Threads, scatter_from};
 use super::spring::{projection_residual, scatter_pairs};
@@ -39,7 +39,6 @@ use super::state::{PackedSpring, State};
 use super::wide;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::perm::Perm;
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::linalg::cholesky::{
     CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
@@ -109,8 +108,6 @@ pub struct Projective {
     buffers: SpringBuffers,
     /// The fill-reducing order to use; `None` picks the cheaper ([`Self::symbolic`]).
     pub(crate) fill_order: Option<FactorOrder>,
-    /// The order of the factor in use.
-    chosen: Option<FactorOrder>,
     /// The symbolic factorisation of the last matrix, kept while its pattern stays.
     structure: Option<Structure>,
     /// Symbolic factorisations (orderings) so far: fewer than [`Self::factorizations`] when
@@ -230,13 +227,9 @@ impl Projective {
             });
             self.symbolic_factorizations += 1;
         }
-        let Some(Structure {
-            symbolic, order, ..
-        }) = &self.structure
-        else {
+        let Some(Structure { symbolic, .. }) = &self.structure else {
             unreachable!("the structure was just made");
         };
-        self.chosen = Some(*order);
         let par = parallelism(threads, s.springs.len());
         self.factor = Factor::of(symbolic)?;
         let scratch = symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default());
@@ -324,15 +317,12 @@ impl Projective {
             }),
         );
         let position: Vec<DVec2> = self.particle.iter().map(|&i| s.x[i as usize]).collect();
-        let forward: Vec<usize> = nested_dissection(&position, &start, &neighbours)
-            .into_iter()
-            .map(|r| r as usize)
-            .collect();
-        let mut inverse = vec![0; rows];
-        for (p, &r) in forward.iter().enumerate() {
-            inverse[r] = p;
-        }
-        let perm = Perm::new_checked(forward.into_boxed_slice(), inverse.into_boxed_slice(), rows);
+        let perm = permutation(
+            nested_dissection(&position, &start, &neighbours)
+                .into_iter()
+                .map(|r| r as usize)
+                .collect(),
+        );
         let dissected = factorize(SymmetricOrdering::Custom(perm.as_ref()))?;
         let dissect = match self.fill_order {
             Some(order) => order == FactorOrder::NestedDissection,
@@ -357,7 +347,7 @@ impl Projective {
 
     /// The fill-reducing order of the factor in use (`None` before the first step).
     pub fn factor_order(&self) -> Option<FactorOrder> {
-        self.chosen
+        self.structure.as_ref().map(|k| k.order)
     }
 
     /// Bytes the substitutions read per value of the factor: 4 (f32) or 8 (f64, for an

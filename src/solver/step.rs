@@ -78,8 +78,8 @@ impl Workspace {
             cg_iterations_per_step: sc.cg_iterations_per_step(),
             projective_iterations_per_step: pd.iterations_per_step(),
             factorizations: pd.factorizations,
-            symbolic_factorizations: pd.symbolic_factorizations,
             factorization_seconds: pd.factor_seconds,
+            symbolic_factorizations: pd.symbolic_factorizations,
             factor_nonzeros: pd.factor_nonzeros(),
             factor_bytes_per_value: pd.factor_bytes_per_value(),
             factor_supernodes: pd.factor_supernodes(),
@@ -105,11 +105,11 @@ pub struct SolveStats {
     pub projective_iterations_per_step: Option<f64>,
     /// Projective dynamics: factorisations of M + h²L.
     pub factorizations: u64,
-    /// Projective dynamics: of those, the ones that ordered the matrix anew (its pattern had
-    /// changed: springs, pins); the others kept the last order and structure.
-    pub symbolic_factorizations: u64,
     /// Projective dynamics: their wall time, s.
     pub factorization_seconds: f64,
+    /// Projective dynamics: of the factorisations, the ones that ordered the matrix anew (its
+    /// pattern had changed: springs, pins); the others kept the last order and structure.
+    pub symbolic_factorizations: u64,
     /// Projective dynamics: nonzeros of the last Cholesky factor.
     pub factor_nonzeros: usize,
     /// Projective dynamics: bytes per stored value of the factor, 4 (f32) or 8 (f64, for an
