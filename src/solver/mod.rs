@@ -16,6 +16,7 @@
 //!   boundaries) that only the packing maintains.
 
 pub(crate) mod cholesky;
+pub(crate) mod crew;
 pub(crate) mod etree;
 pub(crate) mod integrators;
 pub(crate) mod kernels;

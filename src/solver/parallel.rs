@@ -4,16 +4,19 @@
 //! without atomics: the packed springs are split into one contiguous part per thread; a part
 //! writes its own slice of the output, the particles no other part touches, and records its
 //! contributions to the rest, which are added after (see [`scatter_from`]). Per-particle passes
-//! split the particle arrays into chunks ([`Threads::chunked`]). Small scenes run
-//! serially: below [`PARALLEL_MIN_SPRINGS`] the cost of waking a thread exceeds the work.
+//! split the particle arrays into chunks ([`Threads::chunked`]). Inside [`Threads::run`] (the
+//! tick's step loop) the passes fork to the pool's threads held ready ([`Crew`]), elsewhere
+//! through rayon, cutting and combining their work the same way. Small scenes run serially:
+//! below [`PARALLEL_MIN_SPRINGS`] sharing the work costs more than it saves.
 
+use super::crew::Crew;
 use super::kernels;
 use super::state::PackedSpring;
 use super::team::{Barrier, Team};
 use glam::DVec2;
 use rayon::prelude::*;
 use std::ops::Range;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// Scenes with fewer springs than this step on one thread (10,100 springs gained nothing from a
 /// second thread, 16,002 gained 1.44x).
@@ -77,13 +80,16 @@ impl Threads {
     }
 
     /// Runs `work` on one of the pool's threads when a scene of `springs` springs is worth
-    /// sharing (else on the calling thread), so that the parallel passes inside it start from
-    /// a pool thread: they then share their work with the pool's other threads directly, and
-    /// no thread outside the pool waits to be woken after each pass.
+    /// sharing (else on the calling thread), with the pool's other threads held ready for it
+    /// (a crew, `src/solver/crew.rs`): the parallel passes inside fork to them with two atomic operations, where
+    /// a fork through rayon had to wake a sleeping worker. Called on one of the pool's own
+    /// threads (inside a held run, or inside a pass), it just runs `work` there.
     pub fn run<R: Send>(&self, springs: usize, work: impl FnOnce() -> R + Send) -> R {
         match self.pool_for(springs) {
-            Some(pool) => pool.install(work),
-            None => work(),
+            Some(pool) if pool.current_thread_index().is_none() => {
+                Crew::hold(pool, self.key(), work)
+            }
+            _ => work(),
         }
     }
 
@@ -95,10 +101,23 @@ impl Threads {
         a: impl FnOnce() -> A + Send,
         b: impl FnOnce() -> B + Send,
     ) -> (A, B) {
-        match self.pool.as_deref() {
-            Some(pool) if sharing => pool.install(|| rayon::join(a, b)),
-            _ => (a(), b()),
-        }
+        let Some(pool) = self.pool.as_deref().filter(|_| sharing) else {
+            return (a(), b());
+        };
+        self.crew(|crew| match crew {
+            Some(crew) if crew.size() >= 2 => {
+                let (a, b) = (Slot::full(a), Slot::full(b));
+                let (ra, rb) = (Slot::empty(), Slot::empty());
+                crew.fork(&|i| match i {
+                    0 => ra.fill(a.take().map(|a| a())),
+                    1 => rb.fill(b.take().map(|b| b())),
+                    _ => {}
+                });
+                let done = "both members ran";
+                (ra.into_inner().expect(done), rb.into_inner().expect(done))
+            }
+            _ => pool.install(|| rayon::join(a, b)),
+        })
     }
 
     /// Runs `work` on every thread of the pool at once, as one [`Team`] whose members meet at
@@ -106,16 +125,58 @@ impl Threads {
     /// calling thread, as a team of one. For a step made of many passes too short to pay for a
     /// fork and a join each (XPBD's colours).
     pub(crate) fn team(&self, springs: usize, work: impl Fn(&Team) + Sync) {
-        match self.pool_for(springs) {
-            Some(pool) => {
+        let Some(pool) = self.pool_for(springs) else {
+            return work(&Team::member(0, 1, &Barrier::new(1)));
+        };
+        self.crew(|crew| match crew {
+            Some(crew) => {
+                let barrier = Barrier::new(crew.size());
+                crew.fork(&|i| {
+                    let _poison = barrier.guard();
+                    work(&Team::member(i, crew.size(), &barrier));
+                });
+            }
+            None => {
                 let barrier = Barrier::new(pool.current_num_threads());
                 pool.broadcast(|ctx| {
                     let _poison = barrier.guard();
                     work(&Team::member(ctx.index(), ctx.num_threads(), &barrier));
                 });
             }
-            None => work(&Team::member(0, 1, &Barrier::new(1))),
-        }
+        })
+    }
+
+    /// Runs `f` on each of `items` on the pool's threads, item i on member i mod threads when
+    /// the pool is held ([`Threads::run`]), else as rayon schedules them.
+    fn for_each_item<T: Send>(
+        &self,
+        pool: &rayon::ThreadPool,
+        items: Vec<T>,
+        f: impl Fn(T) + Sync,
+    ) {
+        self.crew(|crew| match crew {
+            Some(crew) => {
+                let items: Vec<Slot<T>> = items.into_iter().map(Slot::full).collect();
+                crew.fork(&|i| {
+                    for item in items.iter().skip(i).step_by(crew.size()) {
+                        if let Some(t) = item.take() {
+                            f(t);
+                        }
+                    }
+                });
+            }
+            None => pool.install(|| items.into_par_iter().for_each(&f)),
+        })
+    }
+
+    /// This pool's crew, when this thread holds it and is free to fork ([`Crew`]).
+    fn crew<R>(&self, f: impl FnOnce(Option<&Crew>) -> R) -> R {
+        Crew::with_current(self.key(), f)
+    }
+
+    /// What identifies this pool to a [`Crew`]: its address (0 without a pool).
+    fn key(&self) -> usize {
+        self.pool.as_ref().map_or(0, |p| Arc::as_ptr(p) as usize)
     }
 
     /// The pool, when the work is big enough to share.
@@ -139,7 +200,25 @@ impl Threads {
         match self.pool_for(springs) {
             Some(pool) if n >= 2 * PARTICLE_CHUNK => {
                 let chunk = n.div_ceil(self.threads).max(PARTICLE_CHUNK);
-                pool.install(|| split_run(data, chunk, &pass, &join))
+                self.crew(|crew| match crew {
+                    Some(crew) => {
+                        // The pieces and the order of combining them are split_run's, so the
+                        // result is the same bits either way.
+                        let mut pieces = Vec::new();
+                        halve(data, chunk, &mut pieces);
+                        let pieces: Vec<Slot<S>> = pieces.into_iter().map(Slot::full).collect();
+                        let results: Vec<Slot<R>> = pieces.iter().map(|_| Slot::empty()).collect();
+                        crew.fork(&|i| {
+                            let mine = pieces.iter().zip(&results).skip(i);
+                            for (piece, out) in mine.step_by(crew.size()) {
+                                out.fill(piece.take().map(&pass));
+                            }
+                        });
+                        let mut results = results.into_iter().map(Slot::into_inner);
+                        combine(n, chunk, &mut results, &join)
+                    }
+                    None => pool.install(|| split_run(data, chunk, &pass, &join)),
+                })
             }
             _ => pass(data),
         }
@@ -168,6 +247,60 @@ fn split_run<S: Split, R: Send>(
         || split_run(right, chunk, pass, join),
     );
     join(l, r)
+}
+
+/// `data` cut as [`split_run`] cuts it, the pieces in order.
+fn halve<S: Split>(data: S, chunk: usize, pieces: &mut Vec<S>) {
+    if data.len() <= chunk {
+        pieces.push(data);
+        return;
+    }
+    let mid = data.len().div_ceil(2);
+    let (left, right) = data.split_at(mid);
+    halve(left, chunk, pieces);
+    halve(right, chunk, pieces);
+}
+
+/// The pieces' results of `n` elements cut by [`halve`], joined as [`split_run`] joins them.
+fn combine<R>(
+    n: usize,
+    chunk: usize,
+    results: &mut impl Iterator<Item = Option<R>>,
+    join: &impl Fn(R, R) -> R,
+) -> R {
+    if n <= chunk {
+        return results.next().flatten().expect("every piece ran");
+    }
+    let mid = n.div_ceil(2);
+    let l = combine(mid, chunk, results, join);
+    let r = combine(n - mid, chunk, results, join);
+    join(l, r)
+}
+
+/// A value handed to a crew member or back: filled once, taken once. (A panic elsewhere does
+/// not make the value in it wrong, so a poisoned lock is ignored.)
+struct Slot<T>(Mutex<Option<T>>);
+
+impl<T> Slot<T> {
+    fn full(value: T) -> Self {
+        Slot(Mutex::new(Some(value)))
+    }
+
+    fn empty() -> Self {
+        Slot(Mutex::new(None))
+    }
+
+    fn fill(&self, value: Option<T>) {
+        *self.0.lock().unwrap_or_else(|e| e.into_inner()) = value;
+    }
+
+    fn take(&self) -> Option<T> {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).take()
+    }
+
+    fn into_inner(self) -> Option<T> {
+        self.0.into_inner().unwrap_or_else(|e| e.into_inner())
+    }
 }
 
 /// Particle arrays cut at the same index: a slice, or a tuple of slices of equal length.
@@ -504,33 +637,29 @@ fn scatter_parts<P: PairPass, I: Fn(usize, &mut [DVec2]) + Sync>(
         .boundary
         .resize_with(layout.parts.len(), Default::default);
     let outs = carve(out, layout.parts.iter().map(|p| p.exclusive.clone()));
-    pool.install(|| {
-        (layout
-            .parts
-            .par_iter()
-            .zip(outs)
-            .zip(buffers.boundary.par_iter_mut()))
-        .for_each(|((part, out), boundary)| {
-            let boundary = &mut boundary.0;
-            boundary.clear();
-            let base = part.exclusive.start;
-            if let Some(init) = init {
-                init(base, out);
+    let items: Vec<_> = (layout.parts.iter().zip(outs))
+        .zip(buffers.boundary.iter_mut())
+        .collect();
+    threads.for_each_item(pool, items, |((part, out), boundary)| {
+        let boundary = &mut boundary.0;
+        boundary.clear();
+        let base = part.exclusive.start;
+        if let Some(init) = init {
+            init(base, out);
+        }
+        for seg in &part.segments {
+            let pairs = &pairs[seg.springs.clone()];
+            if seg.inner {
+                pass.run(pairs, |i, v| out[i - base] += v);
+            } else {
+                pass.run(pairs, |i, v| {
+                    match i.checked_sub(base).and_then(|j| out.get_mut(j)) {
+                        Some(o) => *o += v,
+                        None => boundary.push((i as u32, v)),
+                    }
+                });
             }
-            for seg in &part.segments {
-                let pairs = &pairs[seg.springs.clone()];
-                if seg.inner {
-                    pass.run(pairs, |i, v| out[i - base] += v);
-                } else {
-                    pass.run(pairs, |i, v| {
-                        match i.checked_sub(base).and_then(|j| out.get_mut(j)) {
-                            Some(o) => *o += v,
-                            None => boundary.push((i as u32, v)),
-                        }
-                    });
-                }
-            }
-        });
+        }
     });
     if let Some(init) = init {
         // The particles between the parts' own ranges.
@@ -692,6 +821,57 @@ mod tests {
                 1
             };
             assert_eq!(pieces, expected, "{springs} springs");
+        }
+    }
+
+    /// Inside a held run ([`Threads::run`]) the passes fork to the crew; outside it, through
+    /// rayon. Both cut the work the same way and combine it in the same order, so a sum
+    /// reduction, the spring forces and a join give the same bits, for 2 and 3 threads.
+    #[test]
+    fn held_passes_give_the_rayon_passes_bits() {
+        let (w, h) = (90, 70);
+        let springs = grid(w, h);
+        let x = positions(w * h);
+        let n = x.len();
+        let src: Vec<f64> = (0..3 * n).map(|i| (i as f64 * 0.37).sin()).collect();
+        for t in [2, 3] {
+            let threads = Threads::new(t).unwrap();
+            let passes = || {
+                let sum = threads.chunked(
+                    springs.len(),
+                    &src[..],
+                    |s| s.iter().sum::<f64>(),
+                    |a, b| a + b,
+                );
+                let mut f = vec![DVec2::ZERO; n];
+                let mut buffers = SpringBuffers::default();
+                let init = |start: usize, f: &mut [DVec2]| {
+                    f.iter_mut()
+                        .enumerate()
+                        .for_each(|(i, f)| *f = DVec2::new(0.0, -9.8 * (start + i) as f64))
+                };
+                spring_forces_from(&threads, &mut buffers, &mut f, &x, &springs, &init);
+                let (a, b) = threads.join(true, || src[..n].iter().sum::<f64>(), || src[n].sqrt());
+                (sum.to_bits(), f, a.to_bits(), b.to_bits())
+            };
+            let outside = passes();
+            let held = threads.run(springs.len(), || {
+                assert!(threads.crew(|c| c.is_some()), "the run holds the pool");
+                passes()
+            });
+            assert_eq!(held.0, outside.0, "{t} threads: the sum");
+            assert!(
+                held.1
+                    .iter()
+                    .zip(&outside.1)
+                    .all(|(p, q)| p.x.to_bits() == q.x.to_bits() && p.y.to_bits() == q.y.to_bits()),
+                "{t} threads: the forces"
+            );
+            assert_eq!(
+                (held.2, held.3),
+                (outside.2, outside.3),
+                "{t} threads: the join"
+            );
         }
     }
 
