@@ -94,6 +94,9 @@ pub struct Projective {
     factor: Factor,
     /// Particle of each row of the factor (the fill-reducing order).
     order: Vec<u32>,
+    /// Row of the factor of each particle (`u32::MAX` for an eliminated one): `order` inverted,
+    /// so that the correction is gathered particle by particle, on the pool's threads.
+    factor_row: Vec<u32>,
     /// The iterate, all particles.
     z: Vec<DVec2>,
     /// M y, all particles (constant over the step).
@@ -269,6 +272,11 @@ impl Projective {
             Some(perm) => perm.arrays().0.iter().map(|&r| self.particle[r]).collect(),
             None => self.particle.clone(),
         };
+        self.factor_row.clear();
+        self.factor_row.resize(n, u32::MAX);
+        for (k, &i) in self.order.iter().enumerate() {
+            self.factor_row[i as usize] = k as u32;
+        }
         drop(stack);
         for buf in [&mut self.z, &mut self.my, &mut self.r] {
             buf.resize(n, DVec2::ZERO);
@@ -443,19 +451,32 @@ impl Projective {
                 &local,
                 &start,
             );
-            for ((rx, ry), &i) in self.rhs_x.iter_mut().zip(&mut self.rhs_y).zip(&self.order) {
-                let r = self.r[i as usize];
-                (*rx, *ry) = (r.x, r.y);
-            }
+            let r = &self.r[..];
+            let data = (&mut self.rhs_x[..], &mut self.rhs_y[..], &self.order[..]);
+            threads.each(springs, data, |(rx, ry, order)| {
+                for ((rx, ry), &i) in rx.iter_mut().zip(ry).zip(order) {
+                    let r = r[i as usize];
+                    (*rx, *ry) = (r.x, r.y);
+                }
+            });
             self.factor.solve(
                 &mut self.rhs_x,
                 &mut self.rhs_y,
                 &mut self.substitution,
                 threads,
             );
-            for ((&x, &y), &i) in self.rhs_x.iter().zip(&self.rhs_y).zip(&self.order) {
-                self.z[i as usize] += DVec2::new(x, y);
-            }
+            let (x, y) = (&self.rhs_x[..], &self.rhs_y[..]);
+            threads.each(
+                springs,
+                (&mut self.z[..], &self.factor_row[..]),
+                |(z, row)| {
+                    for (z, &k) in z.iter_mut().zip(row) {
+                        if k != u32::MAX {
+                            *z += DVec2::new(x[k as usize], y[k as usize]);
+                        }
+                    }
+                },
+            );
         }
         let inv_h = 1.0 / dt;
         let data = (&mut s.v[..], &self.z[..], &s.x[..], &s.inv_mass[..]);
