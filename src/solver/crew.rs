@@ -5,30 +5,39 @@
 //! passes (the forces and the particle sweep; implicit Euler's CG, four or five a CG
 //! iteration). Between two passes a rayon worker that has run out of work yields its core a
 //! few dozen times and then sleeps; waking it costs tens of microseconds on a VM, and a pass
-//! waits for its slowest part. Measured on the 256² cloth at two threads (symplectic Euler):
-//! the same passes ran 13–15 % faster when the threads met at spinning barriers for a whole
-//! tick instead of forking and joining through rayon each pass.
+//! waits for its slowest part. Measured on the 256² cloth at two threads (symplectic Euler,
+//! the binaries before and after alternating): about a tenth more spring updates a second.
 //!
 //! [`Crew::hold`] runs a tick's work on one of the pool's threads (member 0) while the others
-//! wait in [`Crew::serve`], spinning on a generation counter. A pass posts itself with
-//! [`Crew::fork`]: every member runs it with its own index, and the poster returns once all
-//! have. A member that spins long yields its core, and between jobs it runs pending rayon
-//! work (`rayon::yield_now`), so rayon code inside the tick (the factorisation's parallel
-//! loops) still finds a second thread.
+//! wait in [`Crew::serve`] on a generation counter. A pass posts itself with [`Crew::fork`]:
+//! every member runs it with its own index, and the poster returns once all have. A waiting
+//! thread spins for [`SPIN`], the gap between two passes, then yields its core for [`YIELD`],
+//! running pending rayon work meanwhile (so that rayon code inside the tick, the
+//! factorisation's parallel loops, still finds a second thread), then parks until woken: in
+//! the app a software renderer needs the cores the tick is not using.
 
 use std::any::Any;
 use std::cell::{Cell, UnsafeCell};
 use std::panic::{AssertUnwindSafe, catch_unwind, resume_unwind};
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Mutex, OnceLock};
+use std::thread::Thread;
+use std::time::{Duration, Instant};
 
 /// A job: what each member runs, given its index.
 type Job<'a> = &'a (dyn Fn(usize) + Sync);
 
-/// Spins before a waiting member starts to yield its core (as the team's barrier does).
-const SPINS_BEFORE_YIELDING: u32 = 4096;
-/// How often a waiting member looks for pending rayon work, in spins.
-const SPINS_PER_RAYON_LOOK: u32 = 64;
+/// How long a waiting thread spins before it starts yielding its core: about the gap between
+/// two passes of a step, so that a pass following another finds the members still spinning.
+const SPIN: Duration = Duration::from_micros(2);
+/// How long a waiting thread then yields its core (to whatever else wants it: a software
+/// renderer's threads, in the app) before it parks until woken. Waiting longer starved the
+/// app's renderer and, with it, the tick: the 64² cloth under Xvfb ran at 0.3–0.4× real time
+/// with 4096 spins and no parking, a median 0.70× with 500 µs of yielding, 0.92× with 50 µs
+/// (through rayon: 0.92×; ten alternating runs each for the last two).
+const YIELD: Duration = Duration::from_micros(50);
+/// A parked member looks again this often, in case a wake-up was lost to a race.
+const PARK: Duration = Duration::from_millis(1);
 
 /// The pool's threads, held for one tick (see the module docs).
 pub(super) struct Crew {
@@ -41,6 +50,10 @@ pub(super) struct Crew {
     done: AtomicUsize,
     job: UnsafeCell<Option<Job<'static>>>,
     quit: AtomicBool,
+    /// Threads parked until the next job or the end of one (see [`YIELD`]), and each
+    /// member's thread, to wake.
+    parked: AtomicUsize,
+    threads: Vec<OnceLock<Thread>>,
     /// The first panic of a member's job, handed to the poster.
     panic: Mutex<Option<Box<dyn Any + Send>>>,
 }
@@ -71,11 +84,16 @@ impl Crew {
             done: AtomicUsize::new(0),
             job: UnsafeCell::new(None),
             quit: AtomicBool::new(false),
+            parked: AtomicUsize::new(0),
+            threads: (0..pool.current_num_threads())
+                .map(|_| OnceLock::new())
+                .collect(),
             panic: Mutex::new(None),
         };
         let work = Mutex::new(Some(work));
         let result = Mutex::new(None);
         pool.broadcast(|ctx| {
+            let _ = crew.threads[ctx.index()].set(std::thread::current());
             if ctx.index() != 0 {
                 crew.serve(ctx.index());
                 return;
@@ -119,7 +137,10 @@ impl Crew {
         // SAFETY: only member 0 writes the job, and no member reads it now (see `Sync`).
         unsafe { *self.job.get() = Some(job) };
         self.done.store(0, Ordering::Relaxed);
-        self.generation.fetch_add(1, Ordering::Release);
+        // SeqCst, with the parking member's count and check: either it sees this job or
+        // this sees it parked and wakes it.
+        self.generation.fetch_add(1, Ordering::SeqCst);
+        self.wake();
         let wait = Wait(self);
         job(0);
         drop(wait);
@@ -133,27 +154,18 @@ impl Crew {
     fn serve(&self, index: usize) {
         let mut seen = 0;
         loop {
-            let mut spins = 0u32;
-            loop {
-                if self.generation.load(Ordering::Acquire) != seen {
-                    break;
-                }
-                if self.quit.load(Ordering::Acquire) {
-                    return;
-                }
-                spins = spins.saturating_add(1);
-                if spins.is_multiple_of(SPINS_PER_RAYON_LOOK)
-                    && rayon::yield_now() == Some(rayon::Yield::Executed)
-                {
-                    continue;
-                }
-                if spins < SPINS_BEFORE_YIELDING {
-                    std::hint::spin_loop();
-                } else {
-                    std::thread::yield_now();
-                }
+            let posted = || {
+                let generation = self.generation.load(Ordering::SeqCst);
+                (generation != seen || self.quit.load(Ordering::SeqCst)).then_some(generation)
+            };
+            let generation = match wait_for(posted, true) {
+                Some(g) => g,
+                None => self.park(posted),
+            };
+            if self.quit.load(Ordering::Acquire) && generation == seen {
+                return;
             }
-            seen = self.generation.load(Ordering::Acquire);
+            seen = generation;
             // SAFETY: written before the bump just seen, not rewritten before this member
             // reports `done` (see `Sync`).
             let job = unsafe { *self.job.get() };
@@ -163,7 +175,63 @@ impl Crew {
                 let mut first = self.panic.lock().unwrap_or_else(|e| e.into_inner());
                 first.get_or_insert(panic);
             }
-            self.done.fetch_add(1, Ordering::Release);
+            self.done.fetch_add(1, Ordering::SeqCst);
+            self.wake();
+        }
+    }
+
+    /// Parks this thread until `ready` has something. Whoever makes it ready wakes the parked
+    /// threads after (SeqCst, with the count and the check here: either this sees it ready,
+    /// or that sees this parked).
+    fn park<T>(&self, ready: impl Fn() -> Option<T>) -> T {
+        loop {
+            self.parked.fetch_add(1, Ordering::SeqCst);
+            let found = ready();
+            if found.is_none() {
+                std::thread::park_timeout(PARK);
+            }
+            self.parked.fetch_sub(1, Ordering::SeqCst);
+            if let Some(value) = found.or_else(&ready) {
+                return value;
+            }
+        }
+    }
+
+    /// Wakes the parked threads (none, mostly: then this is one load).
+    fn wake(&self) {
+        if self.parked.load(Ordering::SeqCst) > 0 {
+            self.threads
+                .iter()
+                .filter_map(OnceLock::get)
+                .for_each(Thread::unpark);
+        }
+    }
+}
+
+/// Waits for `ready` to give a value: spinning for [`SPIN`], then yielding the core for
+/// [`YIELD`] (running pending rayon work first, when `rayon` is set); `None` if it has not
+/// come by then.
+fn wait_for<T>(ready: impl Fn() -> Option<T>, rayon: bool) -> Option<T> {
+    let start = Instant::now();
+    let mut polls = 0u32;
+    loop {
+        if let Some(value) = ready() {
+            return Some(value);
+        }
+        polls = polls.wrapping_add(1);
+        if !polls.is_multiple_of(16) {
+            std::hint::spin_loop();
+            continue;
+        }
+        let waited = start.elapsed();
+        if waited < SPIN {
+            continue;
+        }
+        if waited >= YIELD {
+            return None;
+        }
+        if !(rayon && rayon::yield_now() == Some(rayon::Yield::Executed)) {
+            std::thread::yield_now();
         }
     }
 }
@@ -174,14 +242,10 @@ struct Wait<'a>(&'a Crew);
 
 impl Drop for Wait<'_> {
     fn drop(&mut self) {
-        let mut spins = 0u32;
-        while self.0.done.load(Ordering::Acquire) + 1 < self.0.size {
-            spins = spins.saturating_add(1);
-            if spins < SPINS_BEFORE_YIELDING {
-                std::hint::spin_loop();
-            } else {
-                std::thread::yield_now();
-            }
+        let crew = self.0;
+        let finished = || (crew.done.load(Ordering::SeqCst) + 1 >= crew.size).then_some(());
+        if wait_for(finished, false).is_none() {
+            crew.park(finished);
         }
     }
 }
@@ -191,7 +255,8 @@ struct Release<'a>(&'a Crew);
 
 impl Drop for Release<'_> {
     fn drop(&mut self) {
-        self.0.quit.store(true, Ordering::Release);
+        self.0.quit.store(true, Ordering::SeqCst);
+        self.0.wake();
     }
 }
 
