@@ -36,6 +36,9 @@ const PARTICLE_CHUNK: usize = 8192;
 pub struct Threads {
     threads: usize,
     pool: Option<Arc<rayon::ThreadPool>>,
+    /// Taken while a [`Threads::run`] holds the pool, shared by the clones: one run at a time
+    /// holds a pool (two crews on one pool's threads would wait on each other).
+    holder: Arc<Mutex<()>>,
 }
 
 impl std::fmt::Debug for Threads {
@@ -51,6 +54,7 @@ impl Default for Threads {
         Self::new(n).unwrap_or_else(|_| Threads {
             threads: 1,
             pool: None,
+            holder: Arc::default(),
         })
     }
 }
@@ -71,7 +75,11 @@ impl Threads {
         } else {
             None
         };
-        Ok(Threads { threads, pool })
+        Ok(Threads {
+            threads,
+            pool,
+            holder: Arc::default(),
+        })
     }
 
     /// How many threads the passes use.
@@ -83,10 +91,13 @@ impl Threads {
     /// sharing (else on the calling thread), with the pool's other threads held ready for it
     /// (a crew, `src/solver/crew.rs`): the parallel passes inside fork to them with two atomic operations, where
     /// a fork through rayon had to wake a sleeping worker. Called on one of the pool's own
-    /// threads (inside a held run, or inside a pass), it just runs `work` there.
+    /// threads (inside a held run, or inside a pass), it just runs `work` there. Runs on one
+    /// pool from several threads at once (clones of one `Threads` in two apps) take turns.
     pub fn run<R: Send>(&self, springs: usize, work: impl FnOnce() -> R + Send) -> R {
         match self.pool_for(springs) {
             Some(pool) if pool.current_thread_index().is_none() => {
+                // A panic in an earlier run leaves nothing behind the lock to mend.
+                let _turn = self.holder.lock().unwrap_or_else(|e| e.into_inner());
                 Crew::hold(pool, self.key(), work)
             }
             _ => work(),
@@ -873,6 +884,35 @@ mod tests {
                 "{t} threads: the join"
             );
         }
+    }
+
+    /// Two threads running ticks on clones of one pool at once take turns holding it, and
+    /// both finish (two crews on the same threads would wait on each other).
+    #[test]
+    fn runs_on_one_pool_from_two_threads_take_turns() {
+        let threads = Threads::new(2).unwrap();
+        let data = vec![1.0f64; 1 << 16];
+        let tick = |threads: &Threads| {
+            threads.run(usize::MAX, || {
+                (0..200)
+                    .map(|_| {
+                        threads.chunked(
+                            usize::MAX,
+                            &data[..],
+                            |d| d.iter().sum::<f64>(),
+                            |a, b| a + b,
+                        )
+                    })
+                    .sum::<f64>()
+            })
+        };
+        let other = threads.clone();
+        let (a, b) = std::thread::scope(|s| {
+            let a = s.spawn(|| tick(&threads));
+            let b = s.spawn(|| tick(&other));
+            (a.join().unwrap(), b.join().unwrap())
+        });
+        assert_eq!((a, b), (200.0 * 65536.0, 200.0 * 65536.0));
     }
 
     /// K u through the threaded pair scatter gives the serial product up to round-off.
