@@ -139,11 +139,43 @@ pub struct StepBudget {
     frame_end: Option<Instant>,
     /// Simulated seconds dropped so far because the budget ran out.
     pub dropped_seconds: f64,
+    /// The wall time a step has taken lately (a moving average over the ticks), s.
+    step_seconds: Option<f64>,
 }
 
 impl StepBudget {
     /// How far the allowance may grow, as a multiple of `per_frame`.
     pub const MAX_GROWTH: u32 = 4;
+
+    /// The share of the allowance one tick may take. The budget is checked between ticks, so
+    /// a tick of a method that is slow at this dt (projective dynamics at 1e-4 s: 83 steps of
+    /// 2–3 ms under a software renderer) would hold a frame for its whole length, and the app
+    /// drew 3–5 frames a second; a tick is cut to fit instead (at least one step).
+    pub const TICK_SHARE: f64 = 0.5;
+
+    /// The wall time a step has taken lately, s (`None` before the first tick).
+    pub fn step_seconds(&self) -> Option<f64> {
+        self.step_seconds
+    }
+
+    /// Notes that `steps` steps took `wall`.
+    fn note_steps(&mut self, wall: Duration, steps: u32) {
+        if steps == 0 {
+            return;
+        }
+        let per_step = wall.as_secs_f64() / steps as f64;
+        self.step_seconds = Some(match self.step_seconds {
+            Some(s) => 0.7 * s + 0.3 * per_step,
+            None => per_step,
+        });
+    }
+
+    /// How many steps of a tick fit its share of the allowance, from the recent step time.
+    fn steps_that_fit(&self) -> Option<u32> {
+        let cost = self.step_seconds.filter(|c| *c > 0.0)?;
+        let fit = self.allowance.as_secs_f64() * Self::TICK_SHARE / cost;
+        Some(fit.clamp(1.0, u32::MAX as f64) as u32)
+    }
 
     /// Follows the idle time between the last frame's end and this frame's start:
     /// a = 0.9 a + 0.8 idle, within [per_frame, MAX_GROWTH · per_frame]. When the renderer sets
@@ -167,6 +199,7 @@ impl Default for StepBudget {
             frame_start: None,
             frame_end: None,
             dropped_seconds: 0.0,
+            step_seconds: None,
         }
     }
 }
@@ -431,6 +464,7 @@ fn run_steps(world: &mut World) {
     let steps = world.resource::<TickPlan>().steps_per_tick;
     let threads = world.resource::<SolverThreads>().clone();
     let springs = world.resource::<Solver>().spring_count();
+    let (start, before) = (Instant::now(), world.resource::<SimClock>().steps);
     threads.run(springs, || {
         world.schedule_scope(PhysicsStep, |world, schedule| {
             for _ in 0..steps {
@@ -451,6 +485,9 @@ fn run_steps(world: &mut World) {
             }
         })
     });
+    let taken = world.resource::<SimClock>().steps - before;
+    let mut budget = world.resource_mut::<StepBudget>();
+    budget.note_steps(start.elapsed(), taken.min(u32::MAX as u64) as u32);
 }
 
 /// Sizes the fixed tick from dt, before the fixed loop of each frame.
@@ -471,6 +508,7 @@ fn plan_tick(
     let steps = (plan.target_tick_seconds / params.dt)
         .round()
         .clamp(1.0, 1e6) as u32;
+    let steps = budget.steps_that_fit().map_or(steps, |fit| steps.min(fit));
     if plan.steps_per_tick != steps {
         plan.steps_per_tick = steps;
     }
@@ -573,5 +611,45 @@ mod tests {
             run_frame(&mut budget, &mut now, Duration::ZERO);
         }
         assert_eq!(budget.allowance, budget.per_frame);
+    }
+
+    /// A tick is cut to its share of the frame's allowance once steps are seen to be slow, and
+    /// grows back to its simulated length when they are fast again; never below one step.
+    #[test]
+    fn a_slow_step_shortens_the_tick() {
+        let mut app = crate::headless_app();
+        app.world_mut().resource_mut::<SimParams>().paused = true;
+        // The steps of the next tick, and how many fit the allowance the frame had (which
+        // follows the idle time between frames, so it is read back, not assumed).
+        let per_tick = |app: &mut App, step: Option<f64>| {
+            app.world_mut().resource_mut::<StepBudget>().step_seconds = step;
+            app.update();
+            let allowance = app.world().resource::<StepBudget>().allowance.as_secs_f64();
+            let fit = step.map(|s| (allowance * StepBudget::TICK_SHARE / s).floor() as u32);
+            (app.world().resource::<TickPlan>().steps_per_tick, fit)
+        };
+        let dt = app.world().resource::<SimParams>().dt;
+        let full = (TickPlan::default().target_tick_seconds / dt).round() as u32;
+        assert_eq!(per_tick(&mut app, None).0, full);
+        // 2.5 ms a step: half of a 25–100 ms allowance holds 5 to 20 steps of the 83.
+        let (steps, fit) = per_tick(&mut app, Some(2.5e-3));
+        assert!(steps < full);
+        assert_eq!(Some(steps), fit);
+        assert_eq!(per_tick(&mut app, Some(10.0)).0, 1);
+        assert_eq!(per_tick(&mut app, Some(1e-7)).0, full);
+    }
+
+    /// The step time follows the ticks: a moving average of their wall time per step.
+    #[test]
+    fn the_step_time_follows_the_ticks() {
+        let mut budget = StepBudget::default();
+        budget.note_steps(Duration::from_millis(10), 0);
+        assert_eq!(budget.step_seconds(), None);
+        budget.note_steps(Duration::from_millis(10), 10);
+        assert_eq!(budget.step_seconds(), Some(1e-3));
+        for _ in 0..50 {
+            budget.note_steps(Duration::from_millis(10), 100);
+        }
+        assert!((budget.step_seconds().unwrap() - 1e-4).abs() < 1e-9);
     }
 }
