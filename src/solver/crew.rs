@@ -44,7 +44,7 @@ pub(super) struct Crew {
     size: usize,
     /// Which pool this crew holds (its address): a pass on another pool does not use it.
     pool: usize,
-    /// Bumped by each fork, after `job` is written.
+    /// Bumped by each fork, after `job` is written (SeqCst: see `Crew::park`).
     generation: AtomicUsize,
     /// Members other than 0 that have finished the current job.
     done: AtomicUsize,
@@ -58,10 +58,10 @@ pub(super) struct Crew {
     panic: Mutex<Option<Box<dyn Any + Send>>>,
 }
 
-// SAFETY: `job` is written only by member 0, before the Release bump of `generation`, and
-// read by the other members only after their Acquire load sees that bump and before they
-// report `done`; member 0 writes it again only after every member has reported. The job
-// itself is `Sync`. Everything else is atomic or behind a mutex.
+// SAFETY: `job` is written only by member 0, before its (SeqCst, so releasing) bump of
+// `generation`, and read by the other members only after their (SeqCst, so acquiring) load
+// sees that bump and before they report `done`; member 0 writes it again only after every
+// member has reported. The job itself is `Sync`. Everything else is atomic or behind a mutex.
 unsafe impl Sync for Crew {}
 
 thread_local! {
