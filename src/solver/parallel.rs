@@ -89,10 +89,11 @@ impl Threads {
 
     /// Runs `work` on one of the pool's threads when a scene of `springs` springs is worth
     /// sharing (else on the calling thread), with the pool's other threads held ready for it
-    /// (a crew, `src/solver/crew.rs`): the parallel passes inside fork to them with two atomic operations, where
-    /// a fork through rayon had to wake a sleeping worker. Called on one of the pool's own
-    /// threads (inside a held run, or inside a pass), it just runs `work` there. Runs on one
-    /// pool from several threads at once (clones of one `Threads` in two apps) take turns.
+    /// (a crew, `src/solver/crew.rs`): the parallel passes inside fork to them with two atomic
+    /// operations, where a fork through rayon had to wake a sleeping worker. Called on one of
+    /// the pool's own threads (inside a held run, or inside a pass), it just runs `work`
+    /// there. Runs on one pool from several threads at once (clones of one `Threads` in two
+    /// apps) take turns.
     pub fn run<R: Send>(&self, springs: usize, work: impl FnOnce() -> R + Send) -> R {
         match self.pool_for(springs) {
             Some(pool) if pool.current_thread_index().is_none() => {
