@@ -159,7 +159,7 @@ impl StepBudget {
     }
 
     /// Notes that `steps` steps took `wall`.
-    fn note_steps(&mut self, wall: Duration, steps: u32) {
+    fn note_steps(&mut self, wall: Duration, steps: u64) {
         if steps == 0 {
             return;
         }
@@ -487,7 +487,7 @@ fn run_steps(world: &mut World) {
     });
     let taken = world.resource::<SimClock>().steps - before;
     let mut budget = world.resource_mut::<StepBudget>();
-    budget.note_steps(start.elapsed(), taken.min(u32::MAX as u64) as u32);
+    budget.note_steps(start.elapsed(), taken);
 }
 
 /// Sizes the fixed tick from dt, before the fixed loop of each frame.

@@ -77,17 +77,16 @@ impl Crew {
         key: usize,
         work: impl FnOnce() -> R + Send,
     ) -> R {
+        let size = pool.current_num_threads();
         let crew = Crew {
-            size: pool.current_num_threads(),
+            size,
             pool: key,
             generation: AtomicUsize::new(0),
             done: AtomicUsize::new(0),
             job: UnsafeCell::new(None),
             quit: AtomicBool::new(false),
             parked: AtomicUsize::new(0),
-            threads: (0..pool.current_num_threads())
-                .map(|_| OnceLock::new())
-                .collect(),
+            threads: (0..size).map(|_| OnceLock::new()).collect(),
             panic: Mutex::new(None),
         };
         let work = Mutex::new(Some(work));
@@ -158,10 +157,7 @@ impl Crew {
                 let generation = self.generation.load(Ordering::SeqCst);
                 (generation != seen || self.quit.load(Ordering::SeqCst)).then_some(generation)
             };
-            let generation = match wait_for(posted, true) {
-                Some(g) => g,
-                None => self.park(posted),
-            };
+            let generation = self.wait(posted, true);
             if self.quit.load(Ordering::Acquire) && generation == seen {
                 return;
             }
@@ -178,6 +174,12 @@ impl Crew {
             self.done.fetch_add(1, Ordering::SeqCst);
             self.wake();
         }
+    }
+
+    /// Waits until `ready` has something: spinning, then yielding ([`wait_for`]), then
+    /// parked.
+    fn wait<T>(&self, ready: impl Fn() -> Option<T>, rayon: bool) -> T {
+        wait_for(&ready, rayon).unwrap_or_else(|| self.park(ready))
     }
 
     /// Parks this thread until `ready` has something. Whoever makes it ready wakes the parked
@@ -244,9 +246,7 @@ impl Drop for Wait<'_> {
     fn drop(&mut self) {
         let crew = self.0;
         let finished = || (crew.done.load(Ordering::SeqCst) + 1 >= crew.size).then_some(());
-        if wait_for(finished, false).is_none() {
-            crew.park(finished);
-        }
+        crew.wait(finished, false);
     }
 }
 

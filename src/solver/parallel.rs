@@ -158,26 +158,31 @@ impl Threads {
         })
     }
 
-    /// Runs `f` on each of `items` on the pool's threads, item i on member i mod threads when
-    /// the pool is held ([`Threads::run`]), else as rayon schedules them.
-    fn for_each_item<T: Send>(
+    /// `f` of each of `items`, in order, run on the pool's threads: item i on member i mod
+    /// threads when the pool is held ([`Threads::run`]), else as rayon schedules them.
+    fn map_items<T: Send, R: Send>(
         &self,
         pool: &rayon::ThreadPool,
         items: Vec<T>,
-        f: impl Fn(T) + Sync,
-    ) {
+        f: impl Fn(T) -> R + Sync,
+    ) -> Vec<R> {
         self.crew(|crew| match crew {
             Some(crew) => {
                 let items: Vec<Slot<T>> = items.into_iter().map(Slot::full).collect();
+                let results: Vec<Slot<R>> = items.iter().map(|_| Slot::empty()).collect();
                 crew.fork(&|i| {
-                    for item in items.iter().skip(i).step_by(crew.size()) {
-                        if let Some(t) = item.take() {
-                            f(t);
-                        }
+                    let mine = items.iter().zip(&results).skip(i);
+                    for (item, out) in mine.step_by(crew.size()) {
+                        out.fill(item.take().map(&f));
                     }
                 });
+                let ran = "every member ran its items";
+                results
+                    .into_iter()
+                    .map(|r| r.into_inner().expect(ran))
+                    .collect()
             }
-            None => pool.install(|| items.into_par_iter().for_each(&f)),
+            None => pool.install(|| items.into_par_iter().map(&f).collect()),
         })
     }
 
@@ -212,25 +217,10 @@ impl Threads {
         match self.pool_for(springs) {
             Some(pool) if n >= 2 * PARTICLE_CHUNK => {
                 let chunk = n.div_ceil(self.threads).max(PARTICLE_CHUNK);
-                self.crew(|crew| match crew {
-                    Some(crew) => {
-                        // The pieces and the order of combining them are split_run's, so the
-                        // result is the same bits either way.
-                        let mut pieces = Vec::new();
-                        halve(data, chunk, &mut pieces);
-                        let pieces: Vec<Slot<S>> = pieces.into_iter().map(Slot::full).collect();
-                        let results: Vec<Slot<R>> = pieces.iter().map(|_| Slot::empty()).collect();
-                        crew.fork(&|i| {
-                            let mine = pieces.iter().zip(&results).skip(i);
-                            for (piece, out) in mine.step_by(crew.size()) {
-                                out.fill(piece.take().map(&pass));
-                            }
-                        });
-                        let mut results = results.into_iter().map(Slot::into_inner);
-                        combine(n, chunk, &mut results, &join)
-                    }
-                    None => pool.install(|| split_run(data, chunk, &pass, &join)),
-                })
+                let mut pieces = Vec::new();
+                halve(data, chunk, &mut pieces);
+                let results = self.map_items(pool, pieces, &pass);
+                combine(n, chunk, &mut results.into_iter(), &join)
             }
             _ => pass(data),
         }
@@ -242,26 +232,7 @@ impl Threads {
     }
 }
 
-/// Halves `data` until its pieces are at most `chunk` long, running the halves in parallel.
-fn split_run<S: Split, R: Send>(
-    data: S,
-    chunk: usize,
-    pass: &(impl Fn(S) -> R + Sync),
-    join: &(impl Fn(R, R) -> R + Sync),
-) -> R {
-    if data.len() <= chunk {
-        return pass(data);
-    }
-    let mid = data.len().div_ceil(2);
-    let (left, right) = data.split_at(mid);
-    let (l, r) = rayon::join(
-        || split_run(left, chunk, pass, join),
-        || split_run(right, chunk, pass, join),
-    );
-    join(l, r)
-}
-
-/// `data` cut as [`split_run`] cuts it, the pieces in order.
+/// `data` halved until its pieces are at most `chunk` long, the pieces in order.
 fn halve<S: Split>(data: S, chunk: usize, pieces: &mut Vec<S>) {
     if data.len() <= chunk {
         pieces.push(data);
@@ -273,15 +244,16 @@ fn halve<S: Split>(data: S, chunk: usize, pieces: &mut Vec<S>) {
     halve(right, chunk, pieces);
 }
 
-/// The pieces' results of `n` elements cut by [`halve`], joined as [`split_run`] joins them.
+/// The results of the pieces [`halve`] cut `n` elements into, joined pair by pair as the
+/// halving cut them: the same tree, so the same bits, whoever ran the pieces.
 fn combine<R>(
     n: usize,
     chunk: usize,
-    results: &mut impl Iterator<Item = Option<R>>,
+    results: &mut impl Iterator<Item = R>,
     join: &impl Fn(R, R) -> R,
 ) -> R {
     if n <= chunk {
-        return results.next().flatten().expect("every piece ran");
+        return results.next().expect("a result for every piece");
     }
     let mid = n.div_ceil(2);
     let l = combine(mid, chunk, results, join);
@@ -652,7 +624,7 @@ fn scatter_parts<P: PairPass, I: Fn(usize, &mut [DVec2]) + Sync>(
     let items: Vec<_> = (layout.parts.iter().zip(outs))
         .zip(buffers.boundary.iter_mut())
         .collect();
-    threads.for_each_item(pool, items, |((part, out), boundary)| {
+    threads.map_items(pool, items, |((part, out), boundary)| {
         let boundary = &mut boundary.0;
         boundary.clear();
         let base = part.exclusive.start;
