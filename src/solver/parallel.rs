@@ -590,6 +590,24 @@ pub fn scatter<P: PairPass>(
     );
 }
 
+/// `out[i] += v`, in the serial pair pass.
+///
+/// Every pass gathers its pairs' ends, with bounds checks, from a per-particle array of `out`'s
+/// length (x, the iterate z, the direction u), so an end outside `out` has already panicked
+/// there. This check cannot fail; it skips the add instead of panicking because that runs
+/// fewer instructions than indexing: the 256² cloth's spring pass on one thread 9 % fewer
+/// (instruction counts under callgrind, 30 steps) and 6–10 % faster (8 alternating rounds on an
+/// AMD EPYC); a cold panic function in place of the skip gained nothing. The threaded parts'
+/// inner runs keep indexing: there the same change added 6 % to the count. Debug builds, which
+/// the tests run, still stop on it.
+#[inline(always)]
+fn add_at(out: &mut [DVec2], i: usize, v: DVec2) {
+    match out.get_mut(i) {
+        Some(o) => *o += v,
+        None => debug_assert!(false, "pair end {i} outside the {} particles", out.len()),
+    }
+}
+
 /// [`scatter_from`]; with `init`, each part first starts its own particles, and the particles
 /// of no part are started after the region, before the recorded contributions are added.
 fn scatter_parts<P: PairPass, I: Fn(usize, &mut [DVec2]) + Sync>(
@@ -604,7 +622,7 @@ fn scatter_parts<P: PairPass, I: Fn(usize, &mut [DVec2]) + Sync>(
         if let Some(init) = init {
             init(0, out);
         }
-        pass.run(pairs, |i, v| out[i] += v);
+        pass.run(pairs, |i, v| add_at(out, i, v));
         return;
     };
     let stale = buffers
