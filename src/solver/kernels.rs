@@ -206,14 +206,26 @@ pub fn particle_sweep((x, v, f, inv_mass, drift): SweepArrays, dt: f64, sweep: S
     let (decay, ground) = (sweep.decay.unwrap_or(1.0), sweep.ground.unwrap_or(0.0));
     let ground = (ground, sweep.motion.contact(dt));
     let a = (x, v, f, inv_mass, drift);
+    // Two particles at a time where the CPU has AVX ([`super::wide::particle_sweep`], the same
+    // bits), else one by one.
+    macro_rules! one {
+        ($m:ident, $d:literal, $g:literal) => {{
+            #[cfg(target_arch = "x86_64")]
+            if super::wide::available() {
+                // SAFETY: the CPU has AVX, checked just above.
+                return unsafe { super::wide::particle_sweep::<$m, $d, $g>(a, dt, decay, ground) };
+            }
+            sweep_portable::<$m, $d, $g>(a, dt, decay, ground)
+        }};
+    }
     macro_rules! dispatch {
         ($($m:ident),+) => {
             match (motion, sweep.decay.is_some(), sweep.ground.is_some()) {
                 $(
-                    ($m, false, false) => sweep_kernel::<$m, false, false>(a, dt, decay, ground),
-                    ($m, true, false) => sweep_kernel::<$m, true, false>(a, dt, decay, ground),
-                    ($m, false, true) => sweep_kernel::<$m, false, true>(a, dt, decay, ground),
-                    ($m, true, true) => sweep_kernel::<$m, true, true>(a, dt, decay, ground),
+                    ($m, false, false) => one!($m, false, false),
+                    ($m, true, false) => one!($m, true, false),
+                    ($m, false, true) => one!($m, false, true),
+                    ($m, true, true) => one!($m, true, true),
                 )+
                 _ => unreachable!("motion is one of the four"),
             }
@@ -222,9 +234,10 @@ pub fn particle_sweep((x, v, f, inv_mass, drift): SweepArrays, dt: f64, sweep: S
     dispatch!(EXPLICIT, SYMPLECTIC, END, DRIFT)
 }
 
-/// [`particle_sweep`] for one combination of passes (`MOTION` as there).
+/// [`particle_sweep`] for one combination of passes (`MOTION` as there), one particle at a
+/// time.
 #[inline(always)]
-fn sweep_kernel<const MOTION: u8, const DAMP: bool, const GROUND: bool>(
+pub(super) fn sweep_portable<const MOTION: u8, const DAMP: bool, const GROUND: bool>(
     (x, v, f, inv_mass, drift): SweepArrays,
     dt: f64,
     decay: f64,

@@ -1,4 +1,5 @@
-//! The spring force pass four springs at a time, with AVX.
+//! The spring force pass four springs at a time, and the particle sweep two particles at a
+//! time, with AVX.
 //!
 //! Per spring the pass needs a square root and a division, and their latency, not memory, is
 //! what bounds the scalar loop (measured with `perf annotate`: the loop waits on `divsd`). One
@@ -9,6 +10,7 @@
 
 #![cfg(target_arch = "x86_64")]
 
+use super::kernels::{Contact, SweepArrays};
 use super::spring::{MIN_SPRING_LENGTH, Run, projection_residual, spring_force};
 use super::state::PackedSpring;
 use glam::DVec2;
@@ -233,6 +235,93 @@ unsafe fn four_projections(x: &[DVec2], s: &[PackedSpring], h2: f64, out: &mut [
     }
 }
 
+/// [`super::kernels::particle_sweep`]'s loop (`MOTION` as there) two particles at a time, each
+/// particle's (x, y) a half of a 256-bit register, and the ground contact a blend instead of a
+/// branch: on a cloth lying on the ground the branch goes one way and the other from step to
+/// step, particle by particle, and mispredicts. The operations are the scalar loop's, lane by
+/// lane and in its order (the blend picks the very values the branch assigns), so x and v are
+/// its bits; the finiteness probe sums in another order, which changes no answer: its sum is
+/// zero while every term is, and NaN once one is.
+///
+/// # Safety
+/// The CPU must support AVX ([`available`]).
+#[target_feature(enable = "avx")]
+pub unsafe fn particle_sweep<const MOTION: u8, const DAMP: bool, const GROUND: bool>(
+    (x, v, f, inv_mass, drift): SweepArrays,
+    dt: f64,
+    decay: f64,
+    (ground, contact): (f64, Contact),
+) -> bool {
+    let n = x.len();
+    assert!(v.len() == n && f.len() == n && inv_mass.len() == n && drift.len() == n);
+    let pairs = n / 2;
+    let kick = MOTION <= 1;
+    // SAFETY: the caller guarantees AVX; every load and store reads or writes particles
+    // 2p and 2p + 1 < n of arrays of length n (asserted), a DVec2 being two f64.
+    let probe = unsafe {
+        let (dtv, decayv) = (_mm256_set1_pd(dt), _mm256_set1_pd(decay));
+        let zero = _mm256_setzero_pd();
+        // The y lanes, where the contact acts, and the ground's height there.
+        let y_lanes = _mm256_castsi256_pd(_mm256_set_epi64x(-1, 0, -1, 0));
+        let groundv = _mm256_set1_pd(ground);
+        let (xp, vp) = (x.as_mut_ptr() as *mut f64, v.as_mut_ptr() as *mut f64);
+        let (fp, dp) = (f.as_ptr() as *const f64, drift.as_ptr() as *const f64);
+        let mut probe = zero;
+        for p in 0..pairs {
+            let at = 4 * p;
+            let (w0, w1) = (inv_mass[2 * p], inv_mass[2 * p + 1]);
+            let w = _mm256_set_pd(w1, w1, w0, w0);
+            let mut xv = _mm256_loadu_pd(xp.add(at));
+            let mut vv = _mm256_loadu_pd(vp.add(at));
+            let before = vv;
+            if kick {
+                let fv = _mm256_loadu_pd(fp.add(at));
+                vv = _mm256_add_pd(vv, _mm256_mul_pd(_mm256_mul_pd(fv, dtv), w));
+            }
+            if DAMP {
+                vv = _mm256_mul_pd(vv, decayv);
+            }
+            if GROUND {
+                let height = match contact {
+                    Contact::Start => xv,
+                    Contact::End { dt } => _mm256_add_pd(xv, _mm256_mul_pd(vv, _mm256_set1_pd(dt))),
+                };
+                let free = _mm256_cmp_pd::<_CMP_NEQ_UQ>(w, zero);
+                let below = _mm256_cmp_pd::<_CMP_LT_OQ>(height, groundv);
+                let hit = _mm256_and_pd(_mm256_and_pd(free, below), y_lanes);
+                xv = _mm256_blendv_pd(xv, groundv, hit);
+                vv = _mm256_blendv_pd(vv, zero, hit);
+            }
+            let u = match MOTION {
+                0 => before,
+                1 | 2 => vv,
+                _ => _mm256_loadu_pd(dp.add(at)),
+            };
+            xv = _mm256_add_pd(xv, _mm256_mul_pd(u, dtv));
+            _mm256_storeu_pd(xp.add(at), xv);
+            _mm256_storeu_pd(vp.add(at), vv);
+            probe = _mm256_add_pd(
+                probe,
+                _mm256_add_pd(_mm256_mul_pd(xv, zero), _mm256_mul_pd(vv, zero)),
+            );
+        }
+        let mut lanes = [0.0f64; 4];
+        _mm256_storeu_pd(lanes.as_mut_ptr(), probe);
+        lanes.iter().sum::<f64>()
+    };
+    let tail = 2 * pairs;
+    let rest = (
+        &mut x[tail..],
+        &mut v[tail..],
+        &f[tail..],
+        &inv_mass[tail..],
+        &drift[tail..],
+    );
+    let rest_finite =
+        super::kernels::sweep_portable::<MOTION, DAMP, GROUND>(rest, dt, decay, (ground, contact));
+    probe == 0.0 && rest_finite
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -286,6 +375,90 @@ mod tests {
         };
         assert_eq!(bits(&wide), bits(&scalar));
         assert!(wide[150].is_nan() && wide[0].is_finite());
+    }
+
+    /// The AVX particle sweep and the portable one give the same x and v bits and the same
+    /// finiteness answer, for every combination of motion, damping and ground: particles above,
+    /// on and under the ground (at the start and, for the end-of-step test, at the end),
+    /// pinned ones, a negative zero, an infinite and a NaN velocity, and an odd count.
+    #[test]
+    fn sweep_two_at_a_time_gives_the_portable_bits() {
+        if !available() {
+            return;
+        }
+        use crate::solver::kernels::sweep_portable;
+        let n = 41;
+        let start = |bad: bool| {
+            let x: Vec<DVec2> = (0..n)
+                .map(|i| DVec2::new(0.002 * (20.0 - i as f64), 0.003 * (i as f64 - 20.0)))
+                .collect();
+            let mut v: Vec<DVec2> = (0..n)
+                .map(|i| DVec2::new((i as f64 * 0.7).sin(), (i as f64 * 1.3).cos() * 3.0))
+                .collect();
+            v[5].y = -0.0;
+            if bad {
+                v[11].x = f64::INFINITY;
+                v[30].y = f64::NAN;
+            }
+            let f: Vec<DVec2> = (0..n).map(|i| DVec2::new(0.5, -9.8 + i as f64)).collect();
+            let w: Vec<f64> = (0..n)
+                .map(|i| {
+                    if i % 7 == 3 {
+                        0.0
+                    } else {
+                        1.0 / (1.0 + i as f64)
+                    }
+                })
+                .collect();
+            let d: Vec<DVec2> = (0..n)
+                .map(|i| DVec2::new(-0.2, 0.1 * i as f64 - 2.0))
+                .collect();
+            (x, v, f, w, d)
+        };
+        let bits = |v: &[DVec2]| -> Vec<(u64, u64)> {
+            v.iter().map(|p| (p.x.to_bits(), p.y.to_bits())).collect()
+        };
+        macro_rules! check {
+            ($m:literal, $damp:literal, $ground:literal, $contact:expr) => {
+                for bad in [false, true] {
+                    let (mut x1, mut v1, f, w, d) = start(bad);
+                    let (mut x2, mut v2) = (x1.clone(), v1.clone());
+                    let ground = (0.001, $contact);
+                    let a = sweep_portable::<$m, $damp, $ground>(
+                        (&mut x1, &mut v1, &f, &w, &d),
+                        1e-2,
+                        0.9,
+                        ground,
+                    );
+                    // SAFETY: AVX is available (checked above).
+                    let b = unsafe {
+                        particle_sweep::<$m, $damp, $ground>(
+                            (&mut x2, &mut v2, &f, &w, &d),
+                            1e-2,
+                            0.9,
+                            ground,
+                        )
+                    };
+                    let what = format!(
+                        "motion {} damping {} ground {} bad {bad}",
+                        $m, $damp, $ground
+                    );
+                    assert_eq!((bits(&x1), bits(&v1)), (bits(&x2), bits(&v2)), "{what}");
+                    assert_eq!((a, b), (!bad, !bad), "{what}");
+                }
+            };
+        }
+        let end = Contact::End { dt: 1e-2 };
+        check!(0, false, false, Contact::Start);
+        check!(0, true, true, Contact::Start);
+        check!(1, false, true, Contact::Start);
+        check!(1, true, false, Contact::Start);
+        check!(1, true, true, Contact::Start);
+        check!(2, false, true, end);
+        check!(2, true, true, end);
+        check!(2, true, false, end);
+        check!(3, false, false, Contact::Start);
+        check!(3, true, true, Contact::Start);
     }
 
     /// The AVX local step and the scalar one give the same bits, coincident and NaN ends too.
