@@ -42,3 +42,10 @@ pub use projective::FactorOrder;
 pub use stability::StabilityEstimate;
 pub use state::{Energy, PackedSpring, State};
 pub use step::{Method, SolveStats, Workspace};
+
+/// Each vector's two coordinates as bits, for the tests that ask two ways of computing the same
+/// thing for the same bits.
+#[cfg(test)]
+pub(crate) fn bits(v: &[glam::DVec2]) -> Vec<(u64, u64)> {
+    v.iter().map(|p| (p.x.to_bits(), p.y.to_bits())).collect()
+}

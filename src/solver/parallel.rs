@@ -686,6 +686,7 @@ fn scatter_parts<P: PairPass, I: Fn(usize, &mut [DVec2]) + Sync>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::solver::bits;
 
     /// The springs of a row-major `w`×`h` grid, structural and both diagonals, sorted as the
     /// solver packs them.
@@ -862,13 +863,7 @@ mod tests {
                 passes()
             });
             assert_eq!(held.0, outside.0, "{t} threads: the sum");
-            assert!(
-                held.1
-                    .iter()
-                    .zip(&outside.1)
-                    .all(|(p, q)| p.x.to_bits() == q.x.to_bits() && p.y.to_bits() == q.y.to_bits()),
-                "{t} threads: the forces"
-            );
+            assert!(bits(&held.1) == bits(&outside.1), "{t} threads: the forces");
             assert_eq!(
                 (held.2, held.3),
                 (outside.2, outside.3),
@@ -962,9 +957,6 @@ mod tests {
                     }
                 };
                 spring_forces_from(&threads, &mut b2, &mut together, &x, &springs, &init);
-                let bits = |v: &[DVec2]| -> Vec<[u64; 2]> {
-                    v.iter().map(|p| [p.x.to_bits(), p.y.to_bits()]).collect()
-                };
                 assert!(bits(&apart) == bits(&together), "{count} threads");
             }
         }

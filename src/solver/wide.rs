@@ -325,6 +325,7 @@ pub unsafe fn particle_sweep<const MOTION: u8, const DAMP: bool, const GROUND: b
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::solver::bits;
     use crate::solver::spring::scatter_pairs;
 
     /// Forces from the AVX pass and the scalar pass, for springs of every kind: runs sharing an
@@ -370,9 +371,6 @@ mod tests {
         unsafe { for_each_spring_force(&x, &springs, |i, f| wide[i] += f) };
         let mut scalar = vec![DVec2::ZERO; x.len()];
         scatter_pairs(&springs, |s| spring_force(s, &x), |i, f| scalar[i] += f);
-        let bits = |v: &[DVec2]| -> Vec<(u64, u64)> {
-            v.iter().map(|p| (p.x.to_bits(), p.y.to_bits())).collect()
-        };
         assert_eq!(bits(&wide), bits(&scalar));
         assert!(wide[150].is_nan() && wide[0].is_finite());
     }
@@ -414,9 +412,6 @@ mod tests {
                 .map(|i| DVec2::new(-0.2, 0.1 * i as f64 - 2.0))
                 .collect();
             (x, v, f, w, d)
-        };
-        let bits = |v: &[DVec2]| -> Vec<(u64, u64)> {
-            v.iter().map(|p| (p.x.to_bits(), p.y.to_bits())).collect()
         };
         macro_rules! check {
             ($m:literal, $damp:literal, $ground:literal, $contact:expr) => {
@@ -502,9 +497,6 @@ mod tests {
             |s| Some(super::super::spring::projection_residual(s, &x, h2)),
             |i, c| scalar[i] += c,
         );
-        let bits = |v: &[DVec2]| -> Vec<(u64, u64)> {
-            v.iter().map(|p| (p.x.to_bits(), p.y.to_bits())).collect()
-        };
         assert_eq!(bits(&wide), bits(&scalar));
         assert!(wide[40].is_nan() && wide[0].is_finite());
     }
