@@ -4,6 +4,7 @@ use clap::{Args, Parser, Subcommand};
 use hooke::runner::{self, Duration, Overrides};
 use hooke::scene::presets;
 use hooke::sim::Integrator;
+use hooke::solver::MAX_THREADS;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -67,7 +68,7 @@ enum BenchCommand {
         /// Directory to write into.
         #[arg(long, default_value = "docs")]
         out: PathBuf,
-        /// Thread counts to measure (default: 1 and all cores).
+        /// Thread counts to measure, each 1 to 256 (default: 1 and all cores).
         #[arg(long, value_delimiter = ',')]
         threads: Vec<usize>,
         /// Spring updates per run (sets the number of steps).
@@ -87,7 +88,7 @@ enum BenchCommand {
         /// Cloth widths (particles per side; default about 1, 2, 4, 8 and 16 M springs).
         #[arg(long, value_delimiter = ',')]
         widths: Vec<usize>,
-        /// Thread counts to measure (default: 1 and all cores).
+        /// Thread counts to measure, each 1 to 256 (default: 1 and all cores).
         #[arg(long, value_delimiter = ',')]
         threads: Vec<usize>,
         /// Steps per run.
@@ -161,7 +162,7 @@ struct RunArgs {
     /// XPBD: constraint sweeps per substep (default 1).
     #[arg(long, value_name = "N")]
     xpbd_iterations: Option<u32>,
-    /// Solver threads (default: all cores).
+    /// Solver threads, 1 to 256 (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
     /// Write the final state as CSV (id,x,y,vx,vy).
@@ -468,10 +469,12 @@ fn list_flag(flag: &str, values: &[usize]) -> String {
     format!(" {flag} {}", list.join(","))
 }
 
-/// The thread counts asked for, or 1 and all cores; each at least 1.
+/// The thread counts asked for, or 1 and all cores; each 1 to [`MAX_THREADS`].
 fn thread_counts(threads: Vec<usize>) -> Result<Vec<usize>, String> {
-    if threads.contains(&0) {
-        return Err("--threads must be at least 1".into());
+    if let Some(t) = threads.iter().find(|t| !(1..=MAX_THREADS).contains(*t)) {
+        return Err(format!(
+            "--threads must be between 1 and {MAX_THREADS}, got {t}"
+        ));
     }
     if !threads.is_empty() {
         return Ok(threads);

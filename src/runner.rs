@@ -2,6 +2,7 @@
 
 use crate::scene::{LoadedScene, load_into_world};
 use crate::sim::{self, Integrator, SimClock, SimParams, SimStatus, Solver};
+use crate::solver::MAX_THREADS;
 use serde::Serialize;
 use std::io::Write;
 use std::path::Path;
@@ -72,8 +73,10 @@ impl Overrides {
                 return Err(format!("{flag} {}, got {n}", sim::Iterations::RULE));
             }
         }
-        if self.threads == Some(0) {
-            return Err("--threads must be at least 1".into());
+        if let Some(t) = self.threads.filter(|t| !(1..=MAX_THREADS).contains(t)) {
+            return Err(format!(
+                "--threads must be between 1 and {MAX_THREADS}, got {t}"
+            ));
         }
         Ok(())
     }

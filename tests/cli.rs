@@ -255,8 +255,16 @@ fn large_step_methods_report_their_iterations() {
 
 #[test]
 fn bad_flags() {
-    let cases: [(&[&str], &str); 12] = [
+    let cases: [(&[&str], &str); 14] = [
         (&["--dt", "-1"], "--dt must be finite and > 0"),
+        (
+            &["--threads", "0"],
+            "--threads must be between 1 and 256, got 0",
+        ),
+        (
+            &["--threads", "100000"],
+            "--threads must be between 1 and 256, got 100000",
+        ),
         (
             &["--pd-iterations", "0"],
             "--pd-iterations must be between 1 and 100000, got 0",
@@ -361,9 +369,16 @@ fn bench_scale_writes_its_report() {
 
 #[test]
 fn bad_bench_flags() {
-    let cases: [(&[&str], &str); 3] = [
+    let cases: [(&[&str], &str); 4] = [
         (&["--repeat", "0"], "--repeat must be at least 1"),
-        (&["--threads", "1,0"], "--threads must be at least 1"),
+        (
+            &["--threads", "1,0"],
+            "--threads must be between 1 and 256, got 0",
+        ),
+        (
+            &["--threads", "2,300"],
+            "--threads must be between 1 and 256, got 300",
+        ),
         (&["--budget=-1"], "--budget must be finite and > 0"),
     ];
     for (flags, needle) in cases {

@@ -37,7 +37,7 @@ pub(crate) mod xpbd;
 pub use integrators::CgSettings;
 pub use kernels::{Contact, Motion, Sweep};
 pub use method::{Integrator, Iterations};
-pub use parallel::{PARALLEL_MIN_SPRINGS, Threads};
+pub use parallel::{MAX_THREADS, PARALLEL_MIN_SPRINGS, Threads};
 pub use projective::FactorOrder;
 pub use stability::StabilityEstimate;
 pub use state::{Energy, PackedSpring, State};

@@ -24,13 +24,21 @@ pub const PARALLEL_MIN_SPRINGS: usize = 12_000;
 /// Particle passes split into chunks of at least this many particles.
 const PARTICLE_CHUNK: usize = 8192;
 
+/// The most solver threads a pool may have. The passes hand work to every thread and wait for
+/// all of them, so threads beyond the cores only wait on each other (on a 2-core machine, 64
+/// threads stepped the 256² cloth 5× slower than 2), and starting them is not free either:
+/// 4,000 took 7.6 s to start and a 100,000-thread request ran for over a minute without
+/// stepping.
+pub const MAX_THREADS: usize = 256;
+
 /// The kernels' thread pool. `threads == 1` runs everything on the calling thread.
 ///
 /// ```
-/// # use hooke::solver::Threads;
+/// # use hooke::solver::{MAX_THREADS, Threads};
 /// let two = Threads::new(2).unwrap();
 /// assert_eq!(two.threads(), 2);
 /// assert!(Threads::new(0).is_err());
+/// assert!(Threads::new(MAX_THREADS + 1).is_err());
 /// ```
 #[derive(Clone)]
 pub struct Threads {
@@ -62,8 +70,10 @@ impl Default for Threads {
 impl Threads {
     /// A pool of `threads` solver threads (1: no pool, everything on the calling thread).
     pub fn new(threads: usize) -> Result<Self, String> {
-        if threads == 0 {
-            return Err("the thread count must be at least 1".into());
+        if !(1..=MAX_THREADS).contains(&threads) {
+            return Err(format!(
+                "the thread count must be between 1 and {MAX_THREADS}, got {threads}"
+            ));
         }
         let pool = if threads > 1 {
             let pool = rayon::ThreadPoolBuilder::new()
