@@ -225,3 +225,32 @@ fn a_dangling_spring_does_not_keep_the_simulation_paused() {
     assert_eq!(advance(app.world_mut(), 50), 50);
     assert_eq!(*app.world().resource::<SimStatus>(), SimStatus::Running);
 }
+
+/// `check` runs the tick's own input check without stepping: a bad edit is caught before any
+/// step, and a good scene checked this way steps as it would have.
+#[test]
+fn check_catches_a_bad_edit_without_stepping() {
+    let mut app = rope();
+    let e = nth::<Spring>(app.world_mut(), 2);
+    let mut s = *app.world().get::<Spring>(e).unwrap();
+    s.stiffness = f64::NAN;
+    app.world_mut().entity_mut(e).insert(s);
+    let steps = app.world().resource::<SimClock>().steps;
+    check(app.world_mut()).unwrap();
+    let p = problem(&app).expect("caught by check");
+    assert_eq!(p.field, "Spring.stiffness", "{p}");
+    assert_eq!(app.world().resource::<SimClock>().steps, steps);
+    assert!(app.world().resource::<SimParams>().paused);
+
+    let loaded = hooke::scene::presets::resolve("rope").unwrap();
+    let (mut checked, mut plain) = (
+        hooke::running_app(&loaded).unwrap(),
+        hooke::running_app(&loaded).unwrap(),
+    );
+    check(checked.world_mut()).unwrap();
+    assert_eq!(problem(&checked), None);
+    advance(checked.world_mut(), 100);
+    advance(plain.world_mut(), 100);
+    assert_eq!(solver(&checked).x(), solver(&plain).x());
+    assert_eq!(solver(&checked).x().len(), 16);
+}

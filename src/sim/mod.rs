@@ -27,7 +27,8 @@ pub use params::*;
 pub use profile::PassTimes;
 pub use pull::Attraction;
 pub use schedule::{
-    ParticleSweep, PhysicsStep, PhysicsSystems, SimPlugin, StepBudget, StepSystems, advance, pack,
+    ParticleSweep, PhysicsStep, PhysicsSystems, SimPlugin, StepBudget, StepSystems, advance, check,
+    pack,
 };
 #[allow(deprecated)]
 pub use schedule::{PhysicsSet, StepSet};

@@ -236,7 +236,7 @@ impl Plugin for SimPlugin {
         .add_systems(
             FixedUpdate,
             (
-                (inputs::check_inputs, sync_tick.run_if(inputs::inputs_valid))
+                (check_tick, sync_tick.run_if(inputs::inputs_valid))
                     .chain()
                     .in_set(PhysicsSystems::Prepare),
                 run_steps
@@ -571,6 +571,25 @@ pub fn pack(world: &mut World) -> Result<(), String> {
     world
         .run_system_cached(sync_into_solver)
         .map_err(|e| format!("cannot pack the solver: {e}"))
+}
+
+/// Checks the inputs now, without stepping (the check the first tick would run: every particle
+/// and spring of a newly loaded scene), so that a run can time its steps apart from it: on the
+/// 2000² cloth (16 M springs) this first check takes about 0.23 s, against 0.03 s a step.
+/// The tick runs the same cached system instance ([`check_tick`]), so that it then sees only
+/// what changed since. Fails only when the world lacks the [`SimPlugin`] resources.
+pub fn check(world: &mut World) -> Result<(), String> {
+    world
+        .run_system_cached(inputs::check_inputs)
+        .map_err(|e| format!("cannot check the inputs: {e}"))
+}
+
+/// The tick's input check: [`check`]'s cached system instance.
+fn check_tick(world: &mut World) {
+    if let Err(e) = check(world) {
+        // Only when the world lacks the plugin's resources, which the plugin inserts.
+        tracing::error!("hooke: {e}");
+    }
 }
 
 /// The tick's sync: the same cached system instance as [`pack`]'s, so that the change
