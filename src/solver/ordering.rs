@@ -121,7 +121,81 @@ pub fn nested_dissection(position: &[DVec2], start: &[usize], neighbours: &[u32]
         stack.push(Work::Dissect(b..b + kept));
         stack.push(Work::Dissect(a..b));
     }
-    order
+    postorder(&order, start, neighbours)
+}
+
+/// `order` renumbered so that its elimination tree is in postorder, every subtree a run of
+/// consecutive numbers ending at its root: the same tree, so the same fill and supernodes.
+///
+/// Why: the substitutions run two subtrees at once ([`super::etree::TreeSplit`]), which needs
+/// each subtree's columns to be a run. Nested dissection numbers each half before its
+/// separator, so its cuts give runs, but a leaf set numbered as it comes can hold two pieces
+/// with no spring between them, whose columns then interleave; on the 256² grid, leaves of 16
+/// did, and the factor then ran on one thread only. Children are visited in ascending order,
+/// so an order already in postorder comes back unchanged.
+pub fn postorder(order: &[u32], start: &[usize], neighbours: &[u32]) -> Vec<u32> {
+    const NONE: usize = usize::MAX;
+    let n = order.len();
+    let mut at = vec![0usize; n];
+    for (k, &r) in order.iter().enumerate() {
+        at[r as usize] = k;
+    }
+    // The elimination tree of the matrix in this order (Liu's algorithm: each row's neighbours
+    // numbered before it hang, through their trees' current roots, under it; `ancestor`
+    // shortcuts the climbs).
+    let (mut parent, mut ancestor) = (vec![NONE; n], vec![NONE; n]);
+    for (k, &r) in order.iter().enumerate() {
+        for &q in &neighbours[start[r as usize]..start[r as usize + 1]] {
+            let mut i = at[q as usize];
+            if i >= k {
+                continue;
+            }
+            while ancestor[i] != NONE && ancestor[i] != k {
+                let next = ancestor[i];
+                ancestor[i] = k;
+                i = next;
+            }
+            if ancestor[i] == NONE {
+                ancestor[i] = k;
+                parent[i] = k;
+            }
+        }
+    }
+    // Children lists in ascending order (a counting sort by parent), then a depth-first walk
+    // from each root in ascending order, numbering each node after its children.
+    let mut first = vec![0usize; n + 1];
+    for &p in &parent {
+        if p != NONE {
+            first[p + 1] += 1;
+        }
+    }
+    for k in 0..n {
+        first[k + 1] += first[k];
+    }
+    let mut fill = first.clone();
+    let mut children = vec![0usize; first[n]];
+    for (k, &p) in parent.iter().enumerate() {
+        if p != NONE {
+            children[fill[p]] = k;
+            fill[p] += 1;
+        }
+    }
+    let mut post = Vec::with_capacity(n);
+    let mut stack: Vec<(usize, usize)> = vec![];
+    for root in (0..n).filter(|&k| parent[k] == NONE) {
+        stack.push((root, first[root]));
+        while let Some((k, next)) = stack.last_mut() {
+            if *next < first[*k + 1] {
+                let child = children[*next];
+                *next += 1;
+                stack.push((child, first[child]));
+            } else {
+                post.push(order[*k]);
+                stack.pop();
+            }
+        }
+    }
+    post
 }
 
 #[cfg(test)]
@@ -169,6 +243,19 @@ mod tests {
                 assert!(x == column || y == column || (x < column) == (y < column));
             }
         }
+    }
+
+    /// Two chains with no spring between them, numbered alternately (0-2-4 and 1-3-5): each
+    /// chain's elimination tree is a path to its last row, so in postorder each chain comes
+    /// whole; an order already in postorder (the dissection's, on a whole grid) is kept.
+    #[test]
+    fn postorder_makes_each_subtree_a_run_and_keeps_a_postorder() {
+        let (start, neighbours) = adjacency(6, [(0, 2), (2, 4), (1, 3), (3, 5)].into_iter());
+        let order: Vec<u32> = (0..6).collect();
+        assert_eq!(postorder(&order, &start, &neighbours), [0, 2, 4, 1, 3, 5]);
+        let (position, start, neighbours) = grid(20);
+        let dissected = nested_dissection(&position, &start, &neighbours);
+        assert_eq!(postorder(&dissected, &start, &neighbours), dissected);
     }
 
     /// Points all at one place (or not a number) still split by index: every row numbered.
