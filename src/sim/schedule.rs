@@ -576,7 +576,7 @@ pub fn pack(world: &mut World) -> Result<(), String> {
 /// Checks the inputs now, without stepping (the check the first tick would run: every particle
 /// and spring of a newly loaded scene), so that a run can time its steps apart from it: on the
 /// 2000² cloth (16 M springs) this first check takes about 0.23 s, against 0.03 s a step.
-/// The tick runs the same cached system instance ([`check_tick`]), so that it then sees only
+/// The tick runs the same cached system instance, so that it then sees only
 /// what changed since. Fails only when the world lacks the [`SimPlugin`] resources.
 pub fn check(world: &mut World) -> Result<(), String> {
     world

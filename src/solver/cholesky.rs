@@ -206,6 +206,17 @@ impl Factor {
         }
     }
 
+    /// The parts of the elimination tree that a solve runs at once on two or more threads: 2,
+    /// or 1 when the tree does not split into halves of nearly equal work or the factor is too
+    /// small to share ([`PARALLEL_MIN_VALUES`]); 0 for an empty factor.
+    pub fn halves(&self) -> usize {
+        match (self.supernodes(), &self.split) {
+            (0, _) => 0,
+            (_, Some(_)) if self.len() >= PARALLEL_MIN_VALUES => 2,
+            _ => 1,
+        }
+    }
+
     /// Whether the substitutions read the values in f32.
     pub fn single_precision(&self) -> bool {
         !self.single.is_empty()
@@ -779,6 +790,7 @@ mod tests {
                 .map(|r| r as usize)
                 .collect();
         let (f, _) = factor_in_order(n, &t, true, Some(&order));
+        assert_eq!(f.halves(), 2, "{} values", f.len());
         let split = f.split.as_ref().expect("the torn grid's tree splits");
         let [a, b] = &split.groups;
         let (a, b) = (a.columns.len() as f64, b.columns.len() as f64);

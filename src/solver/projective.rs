@@ -353,6 +353,12 @@ impl Projective {
         self.factor.supernodes()
     }
 
+    /// The parts of the factor's elimination tree that the substitutions run at once on two or
+    /// more threads (0 before the first step; see [`Factor::halves`]).
+    pub fn factor_halves(&self) -> usize {
+        self.factor.halves()
+    }
+
     /// The fill-reducing order of the factor in use (`None` before the first step).
     pub fn factor_order(&self) -> Option<FactorOrder> {
         self.structure.as_ref().map(|k| k.order)

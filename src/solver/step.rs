@@ -83,6 +83,7 @@ impl Workspace {
             factor_nonzeros: pd.factor_nonzeros(),
             factor_bytes_per_value: pd.factor_bytes_per_value(),
             factor_supernodes: pd.factor_supernodes(),
+            factor_halves: pd.factor_halves(),
             factor_order: pd.factor_order(),
             xpbd_sweeps_per_step: self.xpbd.sweeps_per_step(),
             xpbd_colours: self.xpbd.colours(),
@@ -118,6 +119,11 @@ pub struct SolveStats {
     /// Projective dynamics: supernodes (dense column blocks) of the last factor; a substitution
     /// pays for each beyond its values.
     pub factor_supernodes: usize,
+    /// Projective dynamics: the parts of the last factor's elimination tree that the
+    /// substitutions run at once on two or more threads: 2, or 1 when the tree does not split
+    /// into halves of nearly equal work or the factor has under 65,536 values; 0 before the
+    /// first step.
+    pub factor_halves: usize,
     /// Projective dynamics: the fill-reducing order of the last factor, the cheaper of
     /// minimum degree and nested dissection for the substitutions.
     #[serde(skip_serializing_if = "Option::is_none")]
