@@ -13,6 +13,8 @@
 //!
 //! Each cut is at the median of the set's longer extent; the separator is the particles of
 //! the upper half that have a spring to the lower half, so the two halves left share no spring.
+//! The order is then put in [`postorder`] of its elimination tree, which the substitutions'
+//! two halves need.
 
 use glam::DVec2;
 
@@ -130,9 +132,10 @@ pub fn nested_dissection(position: &[DVec2], start: &[usize], neighbours: &[u32]
 /// Why: the substitutions run two subtrees at once ([`super::etree::TreeSplit`]), which needs
 /// each subtree's columns to be a run. Nested dissection numbers each half before its
 /// separator, so its cuts give runs, but a leaf set numbered as it comes can hold two pieces
-/// with no spring between them, whose columns then interleave; on the 256² grid, leaves of 16
-/// did, and the factor then ran on one thread only. Children are visited in ascending order,
-/// so an order already in postorder comes back unchanged.
+/// with no spring between them, whose columns then interleave: on a torn cloth (nearly every
+/// torn grid tried), or on the whole 256² grid with leaves of 16, and the substitutions then
+/// ran on one thread only. Children are visited in ascending order, so an order already in
+/// postorder (the whole grid's, with leaves of 4) comes back unchanged.
 pub fn postorder(order: &[u32], start: &[usize], neighbours: &[u32]) -> Vec<u32> {
     const NONE: usize = usize::MAX;
     let n = order.len();
