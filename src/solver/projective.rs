@@ -209,16 +209,33 @@ impl Projective {
                 .enumerate()
                 .map(|(r, &d)| Triplet::new(r, r, d)),
         );
-        let matrix = SparseColMat::<usize, f64>::try_new_from_triplets(rows, rows, &entries)
+        let mut matrix = SparseColMat::<usize, f64>::try_new_from_triplets(rows, rows, &entries)
             .map_err(|e| format!("projective dynamics: cannot assemble M + h²L: {e:?}"))?;
         // The symbolic factorisation (the order and the factor's structure) depends only on the
-        // matrix's pattern: a change of stiffness, mass or dt keeps it.
+        // matrix's pattern: a change of stiffness, mass or dt keeps it, and so do springs that
+        // tore (or were cut) since it was made, their entries kept as zeros
+        // ([`within_pattern`]).
+        let kept = match self
+            .structure
+            .as_ref()
+            .filter(|k| k.asked == self.fill_order)
+        {
+            Some(k)
+                if k.col_ptr == matrix.symbolic().col_ptr()
+                    && k.row_idx == matrix.symbolic().row_idx() =>
+            {
+                true
+            }
+            Some(k) => match within_pattern(&matrix, &k.col_ptr, &k.row_idx) {
+                Some(on_kept) => {
+                    matrix = on_kept;
+                    true
+                }
+                None => false,
+            },
+            None => false,
+        };
         let pattern = matrix.symbolic();
-        let kept = self.structure.as_ref().is_some_and(|k| {
-            k.asked == self.fill_order
-                && k.col_ptr == pattern.col_ptr()
-                && k.row_idx == pattern.row_idx()
-        });
         if !kept {
             let (symbolic, order) = self.symbolic(s, &matrix)?;
             self.structure = Some(Structure {
@@ -387,6 +404,60 @@ pub const DISSECTION_MIN_ROWS: usize = 1024;
 /// 256² cloth's factor (`substitutions_against`), the supernodes of under 4 columns take
 /// about 50 ns each beyond their values' 0.58 ns, about 90 values' worth.
 const SUPERNODE_COST_IN_VALUES: usize = 90;
+
+/// Of the kept pattern's entries, at most this share may be zeros left by springs that tore
+/// before the matrix is ordered anew: the kept order was chosen for the cloth before the tears,
+/// and its factor keeps their fill.
+const MAX_KEPT_ZEROS: f64 = 0.25;
+
+/// `matrix` on the pattern `(col_ptr, row_idx)` of an earlier matrix, with zeros where it has no
+/// entry, when its own pattern is a part of that one and the zeros are few
+/// ([`MAX_KEPT_ZEROS`]): springs removed since (torn, cut) leave the symbolic factorisation
+/// valid, and a refactorisation then redoes only the numbers. The matrix is the same, so the
+/// factor is, up to rounding; a spring added, or a pin, changes the pattern's rows and is not
+/// within it.
+fn within_pattern(
+    matrix: &SparseColMat<usize, f64>,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> Option<SparseColMat<usize, f64>> {
+    let (n, new_ptr, new_rows) = (
+        matrix.ncols(),
+        matrix.symbolic().col_ptr(),
+        matrix.symbolic().row_idx(),
+    );
+    let values = matrix.val();
+    if matrix.nrows() != n || col_ptr.len() != n + 1 || new_rows.len() > row_idx.len() {
+        return None;
+    }
+    let zeros = row_idx.len() - new_rows.len();
+    if zeros as f64 > MAX_KEPT_ZEROS * row_idx.len() as f64 {
+        return None;
+    }
+    let mut on_kept = vec![0.0; row_idx.len()];
+    for j in 0..n {
+        let mut at = col_ptr[j];
+        for q in new_ptr[j]..new_ptr[j + 1] {
+            // Both columns' rows ascend: skip the kept rows the new column lacks.
+            while at < col_ptr[j + 1] && row_idx[at] < new_rows[q] {
+                at += 1;
+            }
+            if at == col_ptr[j + 1] || row_idx[at] != new_rows[q] {
+                return None;
+            }
+            on_kept[at] = values[q];
+            at += 1;
+        }
+    }
+    let symbolic = faer::sparse::SymbolicSparseColMat::new_checked(
+        n,
+        n,
+        col_ptr.to_vec(),
+        None,
+        row_idx.to_vec(),
+    );
+    Some(SparseColMat::new(symbolic, on_kept))
+}
 
 /// The model of a substitution's cost that picks the order: values, and supernodes.
 fn solve_cost(symbolic: &SymbolicCholesky<usize>) -> usize {
@@ -593,6 +664,50 @@ mod tests {
         );
         assert_same_end(&amd.0, &nd.0, dt);
         assert!(amd.0.iter().any(|v| v.length() > 0.1), "the cloth moved");
+    }
+
+    /// Springs torn since the last factorisation (their entries kept as zeros) refactor with
+    /// the kept symbolic factorisation, and give the step a factorisation from scratch gives;
+    /// past a quarter of the pattern gone, the matrix is ordered anew.
+    #[test]
+    fn torn_springs_keep_the_symbolic_factorisation() {
+        let threads = Threads::new(1).unwrap();
+        let dt = 1.0 / 60.0;
+        let mut s = cloth(36);
+        let mut pd = Projective::default();
+        step(&mut s, &mut pd, dt, 10, &threads).unwrap();
+        let tear = |s: &mut State, every: usize| {
+            let mut k = 0;
+            s.springs.retain(|_| {
+                k += 1;
+                k % every != 0
+            });
+            s.touch();
+        };
+        tear(&mut s, 9);
+        let copy = |s: &State| State {
+            x: s.x.clone(),
+            v: s.v.clone(),
+            f: s.f.clone(),
+            mass: s.mass.clone(),
+            inv_mass: s.inv_mass.clone(),
+            springs: s.springs.clone(),
+            ..Default::default()
+        };
+        // Two iterations: the correction form converges to the same step with any factor near
+        // the matrix's, so it is after a few that a factor of another matrix would show.
+        let mut fresh_state = copy(&s);
+        step(&mut s, &mut pd, dt, 2, &threads).unwrap();
+        assert_eq!((pd.factorizations, pd.symbolic_factorizations), (2, 1));
+        let mut fresh = Projective::default();
+        step(&mut fresh_state, &mut fresh, dt, 2, &threads).unwrap();
+        let worst = (s.v.iter().zip(&fresh_state.v))
+            .map(|(a, b)| (*a - *b).length() * dt)
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-9, "the end positions differ by {worst:e}");
+        tear(&mut s, 2);
+        step(&mut s, &mut pd, dt, 10, &threads).unwrap();
+        assert_eq!((pd.factorizations, pd.symbolic_factorizations), (3, 2));
     }
 
     /// A change of stiffness refactors with the kept symbolic factorisation, and gives the step
