@@ -616,16 +616,30 @@ mod tests {
     /// Two steps from the same start end at the same positions to 1e-12 m: their end
     /// velocities times dt agree.
     fn assert_same_end(a: &[DVec2], b: &[DVec2], dt: f64) {
-        let worst = a
-            .iter()
+        let worst = end_gap(a, b, dt);
+        assert!(worst < 1e-12, "the end positions differ by {worst:e}");
+    }
+
+    /// The largest distance between the end positions of two steps from one state, given
+    /// their end velocities: (x₁ − x₀)/dt apart by dt.
+    fn end_gap(a: &[DVec2], b: &[DVec2], dt: f64) -> f64 {
+        a.iter()
             .zip(b)
-            .map(|(a, b)| (*a - *b).length())
-            .fold(0.0, f64::max);
-        assert!(
-            worst * dt < 1e-12,
-            "the end positions differ by {:e}",
-            worst * dt
-        );
+            .map(|(a, b)| (*a - *b).length() * dt)
+            .fold(0.0, f64::max)
+    }
+
+    /// A copy of the state's particles and springs (a fresh revision and workspace).
+    fn copy(s: &State) -> State {
+        State {
+            x: s.x.clone(),
+            v: s.v.clone(),
+            f: s.f.clone(),
+            mass: s.mass.clone(),
+            inv_mass: s.inv_mass.clone(),
+            springs: s.springs.clone(),
+            ..Default::default()
+        }
     }
 
     /// On a cloth big enough to try it, nested dissection is the order chosen (fewer
@@ -685,15 +699,6 @@ mod tests {
             s.touch();
         };
         tear(&mut s, 9);
-        let copy = |s: &State| State {
-            x: s.x.clone(),
-            v: s.v.clone(),
-            f: s.f.clone(),
-            mass: s.mass.clone(),
-            inv_mass: s.inv_mass.clone(),
-            springs: s.springs.clone(),
-            ..Default::default()
-        };
         // Two iterations: the correction form converges to the same step with any factor near
         // the matrix's, so it is after a few that a factor of another matrix would show.
         let mut fresh_state = copy(&s);
@@ -701,9 +706,7 @@ mod tests {
         assert_eq!((pd.factorizations, pd.symbolic_factorizations), (2, 1));
         let mut fresh = Projective::default();
         step(&mut fresh_state, &mut fresh, dt, 2, &threads).unwrap();
-        let worst = (s.v.iter().zip(&fresh_state.v))
-            .map(|(a, b)| (*a - *b).length() * dt)
-            .fold(0.0, f64::max);
+        let worst = end_gap(&s.v, &fresh_state.v, dt);
         assert!(worst < 1e-9, "the end positions differ by {worst:e}");
         tear(&mut s, 2);
         step(&mut s, &mut pd, dt, 10, &threads).unwrap();
@@ -724,15 +727,7 @@ mod tests {
             sp.k *= 3.0;
         }
         s.touch();
-        let mut fresh_state = State {
-            x: s.x.clone(),
-            v: s.v.clone(),
-            f: s.f.clone(),
-            mass: s.mass.clone(),
-            inv_mass: s.inv_mass.clone(),
-            springs: s.springs.clone(),
-            ..Default::default()
-        };
+        let mut fresh_state = copy(&s);
         step(&mut s, &mut pd, dt, 300, &threads).unwrap();
         assert_eq!((pd.factorizations, pd.symbolic_factorizations), (2, 1));
         let mut fresh = Projective::default();
