@@ -593,6 +593,21 @@ mod tests {
         (n, t)
     }
 
+    /// The nested dissection order of the w × w grid's matrix `t` (its rows at the grid's
+    /// points, joined where `t` has an entry), as projective dynamics computes it.
+    fn grid_dissection(w: usize, t: &[Triplet<usize, usize, f64>]) -> Vec<usize> {
+        let n = w * w;
+        let position: Vec<glam::DVec2> = (0..n)
+            .map(|r| glam::DVec2::new((r % w) as f64, (r / w) as f64))
+            .collect();
+        let (start, neighbours) =
+            crate::solver::ordering::adjacency(n, t.iter().map(|e| (e.row, e.col)));
+        crate::solver::ordering::nested_dissection(&position, &start, &neighbours)
+            .into_iter()
+            .map(|r| r as usize)
+            .collect()
+    }
+
     /// The factor of the matrix `t` (n × n), and faer's symbolic factorisation.
     fn factor(
         n: usize,
@@ -725,16 +740,7 @@ mod tests {
         }
         // The two fill orders projective dynamics chooses from, timed in alternating rounds
         // (the best of each, as this VM's timing noise is one-sided).
-        let position: Vec<glam::DVec2> = (0..n)
-            .map(|r| glam::DVec2::new((r % w) as f64, (r / w) as f64))
-            .collect();
-        let (start, neighbours) =
-            crate::solver::ordering::adjacency(n, t.iter().map(|e| (e.row, e.col)));
-        let dissection: Vec<usize> =
-            crate::solver::ordering::nested_dissection(&position, &start, &neighbours)
-                .into_iter()
-                .map(|r| r as usize)
-                .collect();
+        let dissection = grid_dissection(w, &t);
         let orders = [
             ("minimum degree", factor(n, &t, true).0),
             (
@@ -779,17 +785,7 @@ mod tests {
             .into_iter()
             .filter(|e| e.row == e.col || (e.row * 13 + e.col * 7 + (e.row * e.col) % 17) % 3 != 0)
             .collect();
-        let position: Vec<glam::DVec2> = (0..n)
-            .map(|r| glam::DVec2::new((r % w) as f64, (r / w) as f64))
-            .collect();
-        let pairs = t.iter().filter(|e| e.row != e.col).map(|e| (e.row, e.col));
-        let (start, neighbours) = crate::solver::ordering::adjacency(n, pairs);
-        let order: Vec<usize> =
-            crate::solver::ordering::nested_dissection(&position, &start, &neighbours)
-                .into_iter()
-                .map(|r| r as usize)
-                .collect();
-        let (f, _) = factor_in_order(n, &t, true, Some(&order));
+        let (f, _) = factor_in_order(n, &t, true, Some(&grid_dissection(w, &t)));
         assert_eq!(f.halves(), 2, "{} values", f.len());
         let split = f.split.as_ref().expect("the torn grid's tree splits");
         let [a, b] = &split.groups;
