@@ -215,26 +215,13 @@ impl Projective {
         // matrix's pattern: a change of stiffness, mass or dt keeps it, and so do springs that
         // tore (or were cut) since it was made, their entries kept as zeros
         // ([`within_pattern`]).
-        let kept = match self
-            .structure
-            .as_ref()
+        let on_kept = (self.structure.as_ref())
             .filter(|k| k.asked == self.fill_order)
-        {
-            Some(k)
-                if k.col_ptr == matrix.symbolic().col_ptr()
-                    && k.row_idx == matrix.symbolic().row_idx() =>
-            {
-                true
-            }
-            Some(k) => match within_pattern(&matrix, &k.col_ptr, &k.row_idx) {
-                Some(on_kept) => {
-                    matrix = on_kept;
-                    true
-                }
-                None => false,
-            },
-            None => false,
-        };
+            .and_then(|k| within_pattern(&matrix, &k.col_ptr, &k.row_idx));
+        let kept = on_kept.is_some();
+        if let Some(on_kept) = on_kept {
+            matrix = on_kept;
+        }
         let pattern = matrix.symbolic();
         if !kept {
             let (symbolic, order) = self.symbolic(s, &matrix)?;
@@ -411,8 +398,8 @@ const SUPERNODE_COST_IN_VALUES: usize = 90;
 const MAX_KEPT_ZEROS: f64 = 0.25;
 
 /// `matrix` on the pattern `(col_ptr, row_idx)` of an earlier matrix, with zeros where it has no
-/// entry, when its own pattern is a part of that one and the zeros are few
-/// ([`MAX_KEPT_ZEROS`]): springs removed since (torn, cut) leave the symbolic factorisation
+/// entry, when its own pattern is that one (a change of values alone) or a part of it with few
+/// zeros ([`MAX_KEPT_ZEROS`]): springs removed since (torn, cut) leave the symbolic factorisation
 /// valid, and a refactorisation then redoes only the numbers. The matrix is the same, so the
 /// factor is, up to rounding; a spring added, or a pin, changes the pattern's rows and is not
 /// within it.
