@@ -4,7 +4,6 @@ use clap::{Args, Parser, Subcommand};
 use hooke::runner::{self, Duration, Overrides};
 use hooke::scene::presets;
 use hooke::sim::Integrator;
-use hooke::solver::MAX_THREADS;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -469,12 +468,10 @@ fn list_flag(flag: &str, values: &[usize]) -> String {
     format!(" {flag} {}", list.join(","))
 }
 
-/// The thread counts asked for, or 1 and all cores; each 1 to [`MAX_THREADS`].
+/// The thread counts asked for, or 1 and all cores; each checked ([`runner::check_threads`]).
 fn thread_counts(threads: Vec<usize>) -> Result<Vec<usize>, String> {
-    if let Some(t) = threads.iter().find(|t| !(1..=MAX_THREADS).contains(*t)) {
-        return Err(format!(
-            "--threads must be between 1 and {MAX_THREADS}, got {t}"
-        ));
+    for &t in &threads {
+        runner::check_threads(t)?;
     }
     if !threads.is_empty() {
         return Ok(threads);

@@ -73,13 +73,22 @@ impl Overrides {
                 return Err(format!("{flag} {}, got {n}", sim::Iterations::RULE));
             }
         }
-        if let Some(t) = self.threads.filter(|t| !(1..=MAX_THREADS).contains(t)) {
-            return Err(format!(
-                "--threads must be between 1 and {MAX_THREADS}, got {t}"
-            ));
+        if let Some(t) = self.threads {
+            check_threads(t)?;
         }
         Ok(())
     }
+}
+
+/// A `--threads` value: 1 to [`MAX_THREADS`] (what [`crate::solver::Threads::new`] accepts),
+/// checked before anything is loaded or measured.
+pub fn check_threads(threads: usize) -> Result<(), String> {
+    if !(1..=MAX_THREADS).contains(&threads) {
+        return Err(format!(
+            "--threads must be between 1 and {MAX_THREADS}, got {threads}"
+        ));
+    }
+    Ok(())
 }
 
 /// What a run reports (`--json`).
