@@ -17,13 +17,18 @@
 //! bits). Solving through the triangles instead, column by column, took about twice as long a
 //! value on the 4–15-column supernodes that hold half of the 256² cloth's factor.
 //!
-//! What bounds a solve is memory: the 256² cloth's factor has 3.5 M values, and a solve reads
-//! each twice. Two things halve and hide that traffic:
-//! * the values are stored as f32 (converted to f64 as they are loaded; all arithmetic is
-//!   f64). Projective dynamics solves for the correction of its iterate from a residual it
-//!   computes in f64, so the rounding (a solve is then good to about 1e-7) leaves its fixed
-//!   point exactly where it was ([`super::projective`]). A matrix whose condition number may
-//!   be too large for that keeps its values in f64, through the same kernels;
+//! What a solve costs is its work per value and per supernode (the 256² cloth's factor has
+//! 3.5 M values in 10 k supernodes, and a solve reads each value twice), and then the bytes it
+//! reads. Two things cut both:
+//! * the values are stored as f32, and the substitutions compute in f32: the gather that puts
+//!   the right-hand side in the factor's order rounds it to f32, and the correction is added
+//!   back in f64. Eight lanes to a register instead of four, and no conversion as a value is
+//!   loaded: a solve of the 256² cloth's factor took about a quarter less time than with f32
+//!   values and f64 arithmetic. Projective dynamics solves for the correction of its iterate
+//!   from a residual it computes in f64, so the rounding (a solve is then good to about 1e-6)
+//!   leaves its fixed point exactly where it was ([`super::projective`]). A matrix whose
+//!   condition number may be too large for that keeps its values, and the arithmetic, in f64,
+//!   through the same kernels;
 //! * the substitutions walk the values in address order, but in blocks of a few hundred
 //!   bytes, which the hardware prefetcher does not follow; they ask for the values 8 KB ahead.
 //!
@@ -31,7 +36,7 @@
 
 use super::etree::TreeSplit;
 use super::parallel::Threads;
-use super::supernode::{Block, Value, invert};
+use super::supernode::{Block, Real, invert};
 use faer::perm::Perm;
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 use rayon::prelude::*;
@@ -48,8 +53,8 @@ pub struct Factor {
     /// The blocks' values, as faer's numeric factorisation writes them (emptied by
     /// [`Self::finish`] when it rounds them to f32).
     pub l: Vec<f64>,
-    /// The blocks' values rounded to f32, which the substitutions read instead of [`Self::l`]
-    /// when the matrix is well enough conditioned ([`Self::finish`]).
+    /// The blocks' values rounded to f32, which the substitutions use instead of [`Self::l`],
+    /// computing in f32, when the matrix is well enough conditioned ([`Self::finish`]).
     single: Vec<f32>,
     /// The two halves that a solve runs at once, if the tree splits well.
     split: Option<TreeSplit>,
@@ -67,32 +72,32 @@ pub fn permutation(forward: Vec<usize>) -> Perm<usize> {
 }
 
 /// Values for a supernode's pattern rows, or for the shared rows, x and y apart.
-#[derive(Debug, Default, Clone)]
-pub struct Below {
-    x: Vec<f64>,
-    y: Vec<f64>,
+#[derive(Debug, Clone)]
+pub struct Below<R> {
+    x: Vec<R>,
+    y: Vec<R>,
 }
 
 /// The buffers of a solve, kept from solve to solve.
-#[derive(Debug, Default, Clone)]
-pub struct Substitution {
+#[derive(Debug, Clone)]
+pub struct Substitution<R> {
     /// Each half's supernode at hand.
-    below: [Below; 2],
+    below: [Below<R>; 2],
     /// Each half's updates of the shared rows in the forward pass.
-    spill: [Below; 2],
+    spill: [Below<R>; 2],
     /// The shared rows' values in the backward pass.
-    top: Below,
+    top: Below<R>,
 }
 
 /// A part of the right-hand side, rows `lo..lo + x.len()`.
-struct Span<'a> {
+struct Span<'a, R> {
     lo: usize,
-    x: &'a mut [f64],
-    y: &'a mut [f64],
+    x: &'a mut [R],
+    y: &'a mut [R],
 }
 
 /// The halves' columns of x and y ([`TreeSplit::halves`]).
-fn spans<'a>(split: &TreeSplit, x: &'a mut [f64], y: &'a mut [f64]) -> [Span<'a>; 2] {
+fn spans<'a, R>(split: &TreeSplit, x: &'a mut [R], y: &'a mut [R]) -> [Span<'a, R>; 2] {
     split.halves(x, y).map(|(lo, x, y)| Span { lo, x, y })
 }
 
@@ -164,7 +169,7 @@ impl Factor {
     /// Takes in the values that the numeric factorisation wrote to [`Self::l`]: rewrites each
     /// supernode's block as its diagonal block's inverse over W (in f64, see the module docs)
     /// and, if `single`, rounds every value to f32 for the substitutions, which then read half
-    /// the bytes. (Projective dynamics solves for the
+    /// the bytes and compute in f32. (Projective dynamics solves for the
     /// correction to its iterate, whose residual it computes in f64, so the rounding slows its
     /// convergence by a little and leaves its fixed point where it was: see
     /// [`super::projective`].)
@@ -195,15 +200,25 @@ impl Factor {
         }
     }
 
-    /// Solves L Lᵀ u = b in place for two right-hand sides, `x` and `y`; with a split tree
+    /// Solves L Lᵀ u = b in place for two right-hand sides, `x` and `y`, in the precision of
+    /// the factor's values; with a split tree
     /// ([`TreeSplit`]) its two halves run on two of `threads` (or one after the other on one:
     /// the same arithmetic, so the same bits, on any thread count).
-    pub fn solve(&self, x: &mut [f64], y: &mut [f64], work: &mut Substitution, threads: &Threads) {
-        if self.single_precision() {
-            self.solve_in::<f32>(x, y, work, threads);
-        } else {
-            self.solve_in::<f64>(x, y, work, threads);
-        }
+    ///
+    /// # Panics
+    /// If `R` is not the precision of the factor's values ([`Self::single_precision`]).
+    pub fn solve<R: Stored>(
+        &self,
+        x: &mut [R],
+        y: &mut [R],
+        work: &mut Substitution<R>,
+        threads: &Threads,
+    ) {
+        assert!(
+            R::stored(self).len() == self.len(),
+            "a solve in the factor's precision"
+        );
+        self.solve_in(x, y, work, threads);
     }
 
     /// The parts of the elimination tree that a solve runs at once on two or more threads: 2,
@@ -217,16 +232,16 @@ impl Factor {
         }
     }
 
-    /// Whether the substitutions read the values in f32.
+    /// Whether the values are f32, and so the solves' right-hand sides and arithmetic.
     pub fn single_precision(&self) -> bool {
         !self.single.is_empty()
     }
 
     fn solve_in<T: Stored>(
         &self,
-        x: &mut [f64],
-        y: &mut [f64],
-        work: &mut Substitution,
+        x: &mut [T],
+        y: &mut [T],
+        work: &mut Substitution<T>,
         threads: &Threads,
     ) {
         let Some(split) = &self.split else {
@@ -252,7 +267,7 @@ impl Factor {
             &mut spill_b.y,
         ] {
             buf.clear();
-            buf.resize(split.top_rows.len(), 0.0);
+            buf.resize(split.top_rows.len(), T::default());
         }
         // Forward: the halves, each sending its updates of the shared rows to its own buffer;
         // those added in a fixed order; then the shared supernodes.
@@ -313,9 +328,9 @@ impl Factor {
     fn forward<T: Stored>(
         &self,
         supernodes: impl Iterator<Item = usize>,
-        span: &mut Span,
-        below: &mut Below,
-        shared: Option<(&TreeSplit, &mut Below)>,
+        span: &mut Span<T>,
+        below: &mut Below<T>,
+        shared: Option<(&TreeSplit, &mut Below<T>)>,
     ) {
         #[cfg(target_arch = "x86_64")]
         if super::wide::available() {
@@ -335,9 +350,9 @@ impl Factor {
     unsafe fn forward_avx<T: Stored>(
         &self,
         supernodes: impl Iterator<Item = usize>,
-        span: &mut Span,
-        below: &mut Below,
-        shared: Option<(&TreeSplit, &mut Below)>,
+        span: &mut Span<T>,
+        below: &mut Below<T>,
+        shared: Option<(&TreeSplit, &mut Below<T>)>,
     ) {
         self.forward_pass::<true, T>(supernodes, span, below, shared);
     }
@@ -347,9 +362,9 @@ impl Factor {
     fn backward<T: Stored>(
         &self,
         supernodes: impl Iterator<Item = usize>,
-        span: &mut Span,
-        below: &mut Below,
-        shared: Option<(&TreeSplit, &Below)>,
+        span: &mut Span<T>,
+        below: &mut Below<T>,
+        shared: Option<(&TreeSplit, &Below<T>)>,
     ) {
         #[cfg(target_arch = "x86_64")]
         if super::wide::available() {
@@ -369,9 +384,9 @@ impl Factor {
     unsafe fn backward_avx<T: Stored>(
         &self,
         supernodes: impl Iterator<Item = usize>,
-        span: &mut Span,
-        below: &mut Below,
-        shared: Option<(&TreeSplit, &Below)>,
+        span: &mut Span<T>,
+        below: &mut Below<T>,
+        shared: Option<(&TreeSplit, &Below<T>)>,
     ) {
         self.backward_pass::<true, T>(supernodes, span, below, shared);
     }
@@ -380,14 +395,14 @@ impl Factor {
     fn forward_pass<const AVX: bool, T: Stored>(
         &self,
         supernodes: impl Iterator<Item = usize>,
-        span: &mut Span,
-        below: &mut Below,
-        mut shared: Option<(&TreeSplit, &mut Below)>,
+        span: &mut Span<T>,
+        below: &mut Below<T>,
+        mut shared: Option<(&TreeSplit, &mut Below<T>)>,
     ) {
         let mut ahead = Prefetch::default();
         for s in supernodes {
             let (start, end, pattern, block) = self.supernode::<T>(s);
-            ahead.forward(T::of(self), self.values[s] + block.values.len());
+            ahead.forward(T::stored(self), self.values[s] + block.values.len());
             let (lo, x, y) = (span.lo, &mut *span.x, &mut *span.y);
             let (xs, ys) = (&mut x[start - lo..end - lo], &mut y[start - lo..end - lo]);
             let (bx, by) = below.rows(block.rows);
@@ -419,14 +434,14 @@ impl Factor {
     fn backward_pass<const AVX: bool, T: Stored>(
         &self,
         supernodes: impl Iterator<Item = usize>,
-        span: &mut Span,
-        below: &mut Below,
-        shared: Option<(&TreeSplit, &Below)>,
+        span: &mut Span<T>,
+        below: &mut Below<T>,
+        shared: Option<(&TreeSplit, &Below<T>)>,
     ) {
         let mut ahead = Prefetch::default();
         for s in supernodes {
             let (start, end, pattern, block) = self.supernode::<T>(s);
-            ahead.backward(T::of(self), self.values[s]);
+            ahead.backward(T::stored(self), self.values[s]);
             let (lo, x, y) = (span.lo, &mut *span.x, &mut *span.y);
             let (bx, by) = below.rows(block.rows);
             let ((ux, bx), (uy, by)) = (bx.split_at_mut(block.cols), by.split_at_mut(block.cols));
@@ -461,26 +476,26 @@ impl Factor {
         let (start, end) = (self.begin[s], self.begin[s + 1]);
         let pattern = &self.row[self.pattern[s]..self.pattern[s + 1]];
         let (cols, rows) = (end - start, end - start + pattern.len());
-        let values = &T::of(self)[self.values[s]..self.values[s] + rows * cols];
+        let values = &T::stored(self)[self.values[s]..self.values[s] + rows * cols];
         (start, end, pattern, Block { values, cols, rows })
     }
 }
 
-/// The value types a factor stores, and where it keeps each.
-trait Stored: Value {
-    fn of(f: &Factor) -> &[Self];
+/// The precisions a factor stores its values in, and where it keeps each.
+pub(crate) trait Stored: Real {
+    fn stored(f: &Factor) -> &[Self];
 }
 
 impl Stored for f32 {
     #[inline(always)]
-    fn of(f: &Factor) -> &[f32] {
+    fn stored(f: &Factor) -> &[f32] {
         &f.single
     }
 }
 
 impl Stored for f64 {
     #[inline(always)]
-    fn of(f: &Factor) -> &[f64] {
+    fn stored(f: &Factor) -> &[f64] {
         &f.l
     }
 }
@@ -541,13 +556,32 @@ fn fetch<T>(l: &[T], at: usize) {
     }
 }
 
-impl Below {
+impl<R> Default for Below<R> {
+    fn default() -> Self {
+        Below {
+            x: Vec::new(),
+            y: Vec::new(),
+        }
+    }
+}
+
+impl<R> Default for Substitution<R> {
+    fn default() -> Self {
+        Substitution {
+            below: Default::default(),
+            spill: Default::default(),
+            top: Default::default(),
+        }
+    }
+}
+
+impl<R: Real> Below<R> {
     /// The first `n` values of x and y, grown if need be (their old values are left).
     #[inline(always)]
-    fn rows(&mut self, n: usize) -> (&mut [f64], &mut [f64]) {
+    fn rows(&mut self, n: usize) -> (&mut [R], &mut [R]) {
         if self.x.len() < n {
-            self.x.resize(n, 0.0);
-            self.y.resize(n, 0.0);
+            self.x.resize(n, R::default());
+            self.y.resize(n, R::default());
         }
         (&mut self.x[..n], &mut self.y[..n])
     }
@@ -695,7 +729,7 @@ mod tests {
         );
         for threads in [1, 2] {
             let pool = Threads::new(threads).unwrap();
-            let (mut x, mut y) = (vec![0.0; n], vec![0.0; n]);
+            let (mut x, mut y) = (vec![0.0f32; n], vec![0.0f32; n]);
             let mut work = Substitution::default();
             let ms = time(&mut || {
                 x.fill(1.0);
@@ -705,7 +739,7 @@ mod tests {
             line += &format!("; solve on {threads} thread(s) {ms:.2} ms");
         }
         println!("{line}");
-        let (mut x, mut y) = (vec![0.0; n], vec![0.0; n]);
+        let (mut x, mut y) = (vec![0.0f32; n], vec![0.0f32; n]);
         for (lo, hi) in [(0, 4), (4, 16), (16, 64), (64, usize::MAX)] {
             let pick: Vec<usize> = (0..f.supernodes())
                 .filter(|&s| (lo..hi).contains(&(f.begin[s + 1] - f.begin[s])))
@@ -827,7 +861,7 @@ mod tests {
             let one = Threads::new(1).unwrap();
             let mut x: Vec<f64> = fwd.iter().map(|&r| b[r].0).collect();
             let mut y: Vec<f64> = fwd.iter().map(|&r| b[r].1).collect();
-            f.solve(&mut x, &mut y, &mut Substitution::default(), &one);
+            solve(&f, &mut x, &mut y, &one);
             // With the values in f64 a solve is good to round-off; rounded to f32, to about
             // 1e-7 ...
             let error = |x: &[f64], y: &[f64]| {
@@ -849,7 +883,7 @@ mod tests {
                 let au = times(&now);
                 let mut dx: Vec<f64> = fwd.iter().map(|&r| b[r].0 - au[r].0).collect();
                 let mut dy: Vec<f64> = fwd.iter().map(|&r| b[r].1 - au[r].1).collect();
-                f.solve(&mut dx, &mut dy, &mut Substitution::default(), &one);
+                solve(&f, &mut dx, &mut dy, &one);
                 for p in 0..n {
                     xr[p] += dx[p];
                     yr[p] += dy[p];
@@ -864,7 +898,7 @@ mod tests {
             let two = Threads::new(2).unwrap();
             let mut x2: Vec<f64> = fwd.iter().map(|&r| b[r].0).collect();
             let mut y2: Vec<f64> = fwd.iter().map(|&r| b[r].1).collect();
-            f.solve(&mut x2, &mut y2, &mut Substitution::default(), &two);
+            solve(&f, &mut x2, &mut y2, &two);
             assert_eq!((&x, &y), (&x2, &y2), "w {w}");
             assert_eq!(f.split.is_some(), w >= 23, "w {w}");
             // (The 180² factor is big enough for the halves to run at once.)
@@ -883,8 +917,22 @@ mod tests {
             };
             assert_eq!(portable, dispatched, "w {w}");
             for (p, q) in portable.0.iter().zip(&x) {
-                assert!((p - q).abs() < 1e-12, "w {w}");
+                assert!((p - q).abs() < tolerance, "w {w}");
             }
+        }
+    }
+
+    /// A solve of f64 right-hand sides, in the factor's precision.
+    fn solve(f: &Factor, x: &mut [f64], y: &mut [f64], threads: &Threads) {
+        if !f.single_precision() {
+            f.solve(x, y, &mut Substitution::default(), threads);
+            return;
+        }
+        let round = |v: &[f64]| v.iter().map(|&v| v as f32).collect::<Vec<_>>();
+        let (mut xs, mut ys) = (round(x), round(y));
+        f.solve(&mut xs, &mut ys, &mut Substitution::default(), threads);
+        for (v, s) in x.iter_mut().chain(y.iter_mut()).zip(xs.iter().chain(&ys)) {
+            *v = f64::from(*s);
         }
     }
 
@@ -892,9 +940,10 @@ mod tests {
 
     /// A whole solve of `start` with the portable kernels and with the dispatched ones.
     fn both_builds<T: Stored>(f: &Factor, start: &Solution) -> (Solution, Solution) {
-        let solve_with = |forward: &dyn Fn(&mut Span, &mut Below),
-                          backward: &dyn Fn(&mut Span, &mut Below)| {
-            let (mut x, mut y) = start.clone();
+        let solve_with = |forward: &dyn Fn(&mut Span<T>, &mut Below<T>),
+                          backward: &dyn Fn(&mut Span<T>, &mut Below<T>)| {
+            let round = |v: &[f64]| v.iter().map(|&v| T::of(v)).collect::<Vec<_>>();
+            let (mut x, mut y) = (round(&start.0), round(&start.1));
             let mut all = Span {
                 lo: 0,
                 x: &mut x,
@@ -903,7 +952,8 @@ mod tests {
             let mut below = Below::default();
             forward(&mut all, &mut below);
             backward(&mut all, &mut below);
-            (x, y)
+            let get = |v: &[T]| v.iter().map(|v| v.get()).collect::<Vec<_>>();
+            (get(&x), get(&y))
         };
         let all = 0..f.supernodes();
         let portable = solve_with(

@@ -47,11 +47,11 @@ impl Half {
 
 impl TreeSplit {
     /// The halves' columns of x and y, as two disjoint pieces (each with its first column).
-    pub fn halves<'a>(
+    pub fn halves<'a, R>(
         &self,
-        x: &'a mut [f64],
-        y: &'a mut [f64],
-    ) -> [(usize, &'a mut [f64], &'a mut [f64]); 2] {
+        x: &'a mut [R],
+        y: &'a mut [R],
+    ) -> [(usize, &'a mut [R], &'a mut [R]); 2] {
         let [a, b] = &self.groups;
         let (xa, xb) = x.split_at_mut(b.columns.start);
         let (ya, yb) = y.split_at_mut(b.columns.start);

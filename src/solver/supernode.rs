@@ -4,50 +4,189 @@
 //! supernode is one product of its block with a vector and the back substitution one product
 //! of the block's transpose: sums that do not wait on one another.
 //!
-//! Each kernel has a portable form and an AVX form that do the same operations on every
-//! element in the same order (a product and then a sum, each rounded, never fused), so the
-//! two give the same bits. The AVX forms are written with intrinsics because the compiler's
-//! own vectorisation of the portable loops came out as 128-bit and scalar code with register
-//! shuffles (seen with `perf annotate`), at about 2 ns a value. What they gain:
-//! * the product keeps 16 rows of both sums in registers over all the supernode's columns, so
-//!   each value is loaded once and no sum goes back to memory;
+//! The kernels compute in the precision of the values ([`Real`]: f32, or f64 for an
+//! ill-conditioned matrix). Each has a portable form and an AVX form that do the same
+//! operations on every element in the same order (a product and then a sum, each rounded,
+//! never fused), so the two give the same bits. The AVX forms are written with intrinsics
+//! because the compiler's own vectorisation of the portable loops came out as 128-bit and
+//! scalar code with register shuffles (seen with `perf annotate`), at about 2 ns a value. What
+//! they gain:
+//! * the product keeps four registers of rows (32 in f32, 16 in f64) of both sums in
+//!   registers over all the supernode's columns, so each value is loaded once and no sum goes
+//!   back to memory;
 //! * the back substitution takes four columns' dot products at once, eight independent sums,
 //!   so no add waits on the one before it.
 //!
-//! A dot product here sums in four lanes (element k in lane k mod 4, over whole fours), folds
-//! them as (0 + 1) + (2 + 3), and then adds the last elements in order.
+//! A dot product here sums in a register's lanes (element k in lane k mod [`Real::LANES`], over
+//! whole registers), folds them by halves ([`fold`]), and then adds the last elements in
+//! order.
 
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
+use std::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
-/// How the factor's values are stored: f32 (half the bytes) or f64 (for a matrix too
-/// ill-conditioned for f32, as projective dynamics decides when it factors). The kernels convert each to f64 as they load
-/// it; the conversion is exact.
-pub(super) trait Value: Copy + Into<f64> {
-    /// Four values from `p` as f64 lanes.
-    ///
-    /// # Safety
-    /// The CPU must support AVX, and `p` must point to four readable values; always inlined,
-    /// this inherits AVX from its caller.
+/// The precision of a factor's values and of the substitutions' arithmetic: f32 (half the
+/// bytes and twice the lanes) or f64 (for a matrix too ill-conditioned for f32, as projective
+/// dynamics decides when it factors).
+pub(crate) trait Real:
+    Copy
+    + Default
+    + PartialEq
+    + Send
+    + Sync
+    + std::fmt::Debug
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Neg<Output = Self>
+    + AddAssign
+    + SubAssign
+    + 'static
+{
+    /// Lanes in a 256-bit register.
+    const LANES: usize;
+    /// An AVX register of [`Self::LANES`] values.
     #[cfg(target_arch = "x86_64")]
-    unsafe fn load4(p: *const Self) -> __m256d;
+    type V: Copy;
+    /// `v`, rounded to this precision.
+    fn of(v: f64) -> Self;
+    /// This value in f64 (exact).
+    fn get(self) -> f64;
+
+    // The register operations below: each one's safety is that the CPU supports AVX (always
+    // inlined, they inherit it from their caller) and that a pointer points to LANES values.
+
+    /// All lanes zero.
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn zero() -> Self::V;
+    /// All lanes `v`.
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn splat(v: Self) -> Self::V;
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn load(p: *const Self) -> Self::V;
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn store(p: *mut Self, v: Self::V);
+    /// a + b · c, the product rounded and then the sum (never fused).
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn add_product(a: Self::V, b: Self::V, c: Self::V) -> Self::V;
+    /// Each of four registers' lanes summed as [`fold`] sums them, into `out[0..4]`.
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn fold_four(a: [Self::V; 4], out: *mut Self);
 }
 
-impl Value for f32 {
+impl Real for f32 {
+    const LANES: usize = 8;
+    #[cfg(target_arch = "x86_64")]
+    type V = __m256;
+    #[inline(always)]
+    fn of(v: f64) -> f32 {
+        v as f32
+    }
+    #[inline(always)]
+    fn get(self) -> f64 {
+        self.into()
+    }
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    unsafe fn load4(p: *const f32) -> __m256d {
+    unsafe fn zero() -> __m256 {
         // SAFETY: the caller's.
-        unsafe { _mm256_cvtps_pd(_mm_loadu_ps(p)) }
+        unsafe { _mm256_setzero_ps() }
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn splat(v: f32) -> __m256 {
+        // SAFETY: the caller's.
+        unsafe { _mm256_set1_ps(v) }
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn load(p: *const f32) -> __m256 {
+        // SAFETY: the caller's.
+        unsafe { _mm256_loadu_ps(p) }
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn store(p: *mut f32, v: __m256) {
+        // SAFETY: the caller's.
+        unsafe { _mm256_storeu_ps(p, v) }
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn add_product(a: __m256, b: __m256, c: __m256) -> __m256 {
+        // SAFETY: the caller's.
+        unsafe { _mm256_add_ps(a, _mm256_mul_ps(b, c)) }
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn fold_four(a: [__m256; 4], out: *mut f32) {
+        // SAFETY: the caller's.
+        unsafe {
+            // [a0₀₁, a0₂₃, a1₀₁, a1₂₃ | a0₄₅, a0₆₇, a1₄₅, a1₆₇] (aᵢⱼₖ = aᵢⱼ + aᵢₖ), and
+            // columns 2 and 3 alike; then [a0₀₋₃, a1₀₋₃, a2₀₋₃, a3₀₋₃ | the same of 4..8],
+            // and the halves added.
+            let h01 = _mm256_hadd_ps(a[0], a[1]);
+            let h23 = _mm256_hadd_ps(a[2], a[3]);
+            let h = _mm256_hadd_ps(h01, h23);
+            let s = _mm_add_ps(_mm256_castps256_ps128(h), _mm256_extractf128_ps(h, 1));
+            _mm_storeu_ps(out, s);
+        }
     }
 }
 
-impl Value for f64 {
+impl Real for f64 {
+    const LANES: usize = 4;
+    #[cfg(target_arch = "x86_64")]
+    type V = __m256d;
+    #[inline(always)]
+    fn of(v: f64) -> f64 {
+        v
+    }
+    #[inline(always)]
+    fn get(self) -> f64 {
+        self
+    }
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    unsafe fn load4(p: *const f64) -> __m256d {
+    unsafe fn zero() -> __m256d {
+        // SAFETY: the caller's.
+        unsafe { _mm256_setzero_pd() }
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn splat(v: f64) -> __m256d {
+        // SAFETY: the caller's.
+        unsafe { _mm256_set1_pd(v) }
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn load(p: *const f64) -> __m256d {
         // SAFETY: the caller's.
         unsafe { _mm256_loadu_pd(p) }
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn store(p: *mut f64, v: __m256d) {
+        // SAFETY: the caller's.
+        unsafe { _mm256_storeu_pd(p, v) }
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn add_product(a: __m256d, b: __m256d, c: __m256d) -> __m256d {
+        // SAFETY: the caller's.
+        unsafe { _mm256_add_pd(a, _mm256_mul_pd(b, c)) }
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn fold_four(a: [__m256d; 4], out: *mut f64) {
+        // SAFETY: the caller's.
+        unsafe {
+            // [a0₀ + a0₁, a1₀ + a1₁, a0₂ + a0₃, a1₂ + a1₃], and the same for columns 2 and 3.
+            let h01 = _mm256_hadd_pd(a[0], a[1]);
+            let h23 = _mm256_hadd_pd(a[2], a[3]);
+            let low = _mm256_permute2f128_pd(h01, h23, 0x20);
+            let high = _mm256_permute2f128_pd(h01, h23, 0x31);
+            _mm256_storeu_pd(out, _mm256_add_pd(low, high));
+        }
     }
 }
 
@@ -55,16 +194,16 @@ impl Value for f64 {
 /// `cols` rows the inverse of the factor's diagonal block L_D (zero above the diagonal) and
 /// below them W = L_B L_D⁻¹, the factor's pattern rows times that inverse ([`invert`]).
 #[derive(Clone, Copy)]
-pub(super) struct Block<'a, T> {
-    pub values: &'a [T],
+pub(super) struct Block<'a, R> {
+    pub values: &'a [R],
     pub cols: usize,
     pub rows: usize,
 }
 
-impl<'a, T: Value> Block<'a, T> {
+impl<'a, R: Real> Block<'a, R> {
     /// Column j, all rows.
     #[inline(always)]
-    fn column(&self, j: usize) -> &'a [T] {
+    fn column(&self, j: usize) -> &'a [R] {
         &self.values[j * self.rows..(j + 1) * self.rows]
     }
 
@@ -72,19 +211,18 @@ impl<'a, T: Value> Block<'a, T> {
     /// the forward substitution of the supernode (its solution, then its updates of the rows
     /// below).
     #[inline(always)]
-    pub fn product<const AVX: bool>(&self, xs: &[f64], ys: &[f64], bx: &mut [f64], by: &mut [f64]) {
+    pub fn product<const AVX: bool>(&self, xs: &[R], ys: &[R], bx: &mut [R], by: &mut [R]) {
         #[cfg(target_arch = "x86_64")]
         if AVX {
             // SAFETY: AVX is only asked for where the CPU has it.
             unsafe { self.product_avx(xs, ys, bx, by) };
             return;
         }
-        bx.fill(0.0);
-        by.fill(0.0);
+        bx.fill(R::default());
+        by.fill(R::default());
         for j in 0..self.cols {
             let (u, w) = (xs[j], ys[j]);
             for ((x, y), &v) in bx.iter_mut().zip(by.iter_mut()).zip(self.column(j)) {
-                let v: f64 = v.into();
                 *x += v * u;
                 *y += v * w;
             }
@@ -94,7 +232,7 @@ impl<'a, T: Value> Block<'a, T> {
     /// (xs, ys)[j] = Σ_k B[k, j] (bx, by)[k] over every row k: the back substitution of the
     /// supernode, given its own values and the negated solution at its pattern rows.
     #[inline(always)]
-    pub fn dots<const AVX: bool>(&self, bx: &[f64], by: &[f64], xs: &mut [f64], ys: &mut [f64]) {
+    pub fn dots<const AVX: bool>(&self, bx: &[R], by: &[R], xs: &mut [R], ys: &mut [R]) {
         #[cfg(target_arch = "x86_64")]
         if AVX {
             // SAFETY: AVX is only asked for where the CPU has it.
@@ -106,55 +244,55 @@ impl<'a, T: Value> Block<'a, T> {
         }
     }
 
-    /// [`Self::product`] with AVX: 16 rows, then 4, then one at a time.
+    /// [`Self::product`] with AVX: four registers of rows, then one, then one row at a time.
     ///
     /// # Safety
     /// The CPU must support AVX; always inlined, this inherits AVX from its caller.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    unsafe fn product_avx(&self, xs: &[f64], ys: &[f64], bx: &mut [f64], by: &mut [f64]) {
-        let (cols, rows) = (self.cols, self.rows);
+    unsafe fn product_avx(&self, xs: &[R], ys: &[R], bx: &mut [R], by: &mut [R]) {
+        let (cols, rows, lanes) = (self.cols, self.rows, R::LANES);
         assert!(xs.len() >= cols && ys.len() >= cols && bx.len() >= rows && by.len() >= rows);
         assert!(self.values.len() >= cols * rows);
         let l = self.values.as_ptr();
         let mut k = 0;
-        // SAFETY: the caller guarantees AVX; every load reads column j's rows k .. k + 16 (or
-        // + 4) <= rows, and every store bx, by's k .. k + 16 <= rows (asserted).
+        // SAFETY: the caller guarantees AVX; every load reads column j's rows k .. k + 4 lanes
+        // (or + 1) <= rows, and every store bx, by's k .. k + 4 lanes <= rows (asserted).
         unsafe {
-            while k + 16 <= rows {
-                let mut ax = [_mm256_setzero_pd(); 4];
-                let mut ay = [_mm256_setzero_pd(); 4];
+            while k + 4 * lanes <= rows {
+                let mut ax = [R::zero(); 4];
+                let mut ay = [R::zero(); 4];
                 for j in 0..cols {
-                    let (u, w) = (_mm256_set1_pd(xs[j]), _mm256_set1_pd(ys[j]));
+                    let (u, w) = (R::splat(xs[j]), R::splat(ys[j]));
                     let c = l.add(j * rows + k);
                     for m in 0..4 {
-                        let v = T::load4(c.add(4 * m));
-                        ax[m] = _mm256_add_pd(ax[m], _mm256_mul_pd(v, u));
-                        ay[m] = _mm256_add_pd(ay[m], _mm256_mul_pd(v, w));
+                        let v = R::load(c.add(lanes * m));
+                        ax[m] = R::add_product(ax[m], v, u);
+                        ay[m] = R::add_product(ay[m], v, w);
                     }
                 }
                 for m in 0..4 {
-                    _mm256_storeu_pd(bx.as_mut_ptr().add(k + 4 * m), ax[m]);
-                    _mm256_storeu_pd(by.as_mut_ptr().add(k + 4 * m), ay[m]);
+                    R::store(bx.as_mut_ptr().add(k + lanes * m), ax[m]);
+                    R::store(by.as_mut_ptr().add(k + lanes * m), ay[m]);
                 }
-                k += 16;
+                k += 4 * lanes;
             }
-            while k + 4 <= rows {
-                let (mut ax, mut ay) = (_mm256_setzero_pd(), _mm256_setzero_pd());
+            while k + lanes <= rows {
+                let (mut ax, mut ay) = (R::zero(), R::zero());
                 for j in 0..cols {
-                    let v = T::load4(l.add(j * rows + k));
-                    ax = _mm256_add_pd(ax, _mm256_mul_pd(v, _mm256_set1_pd(xs[j])));
-                    ay = _mm256_add_pd(ay, _mm256_mul_pd(v, _mm256_set1_pd(ys[j])));
+                    let v = R::load(l.add(j * rows + k));
+                    ax = R::add_product(ax, v, R::splat(xs[j]));
+                    ay = R::add_product(ay, v, R::splat(ys[j]));
                 }
-                _mm256_storeu_pd(bx.as_mut_ptr().add(k), ax);
-                _mm256_storeu_pd(by.as_mut_ptr().add(k), ay);
-                k += 4;
+                R::store(bx.as_mut_ptr().add(k), ax);
+                R::store(by.as_mut_ptr().add(k), ay);
+                k += lanes;
             }
         }
         for k in k..rows {
-            let (mut x, mut y) = (0.0, 0.0);
+            let (mut x, mut y) = (R::default(), R::default());
             for j in 0..cols {
-                let v: f64 = self.values[j * rows + k].into();
+                let v = self.values[j * rows + k];
                 x += v * xs[j];
                 y += v * ys[j];
             }
@@ -169,46 +307,36 @@ impl<'a, T: Value> Block<'a, T> {
     /// The CPU must support AVX; always inlined, this inherits AVX from its caller.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    unsafe fn dots_avx(&self, bx: &[f64], by: &[f64], xs: &mut [f64], ys: &mut [f64]) {
-        let (cols, rows) = (self.cols, self.rows);
+    unsafe fn dots_avx(&self, bx: &[R], by: &[R], xs: &mut [R], ys: &mut [R]) {
+        let (cols, rows, lanes) = (self.cols, self.rows, R::LANES);
         assert!(xs.len() >= cols && ys.len() >= cols && bx.len() >= rows && by.len() >= rows);
         assert!(self.values.len() >= cols * rows);
-        let (l, full) = (self.values.as_ptr(), rows / 4 * 4);
+        let (l, full) = (self.values.as_ptr(), rows / lanes * lanes);
         let mut j = 0;
         // SAFETY: the caller guarantees AVX; the loads read columns j .. j + 4 <= cols at rows
-        // k .. k + 4 <= rows, bx, by at k .. k + 4 <= rows, and xs, ys at j .. j + 4 <= cols
-        // (asserted).
+        // k .. k + lanes <= rows, bx, by at k .. k + lanes <= rows, and the folds write xs, ys
+        // at j .. j + 4 <= cols (asserted).
         unsafe {
             while j + 4 <= cols {
-                let mut ax = [_mm256_setzero_pd(); 4];
-                let mut ay = [_mm256_setzero_pd(); 4];
+                let mut ax = [R::zero(); 4];
+                let mut ay = [R::zero(); 4];
                 let c = l.add(j * rows);
                 let mut k = 0;
                 while k < full {
-                    let (u, w) = (
-                        _mm256_loadu_pd(bx.as_ptr().add(k)),
-                        _mm256_loadu_pd(by.as_ptr().add(k)),
-                    );
+                    let (u, w) = (R::load(bx.as_ptr().add(k)), R::load(by.as_ptr().add(k)));
                     for m in 0..4 {
-                        let v = T::load4(c.add(m * rows + k));
-                        ax[m] = _mm256_add_pd(ax[m], _mm256_mul_pd(v, u));
-                        ay[m] = _mm256_add_pd(ay[m], _mm256_mul_pd(v, w));
+                        let v = R::load(c.add(m * rows + k));
+                        ax[m] = R::add_product(ax[m], v, u);
+                        ay[m] = R::add_product(ay[m], v, w);
                     }
-                    k += 4;
+                    k += lanes;
                 }
-                let (mut dx, mut dy) = (fold_four(ax), fold_four(ay));
-                for k in full..rows {
-                    let v = _mm256_set_pd(
-                        (*c.add(3 * rows + k)).into(),
-                        (*c.add(2 * rows + k)).into(),
-                        (*c.add(rows + k)).into(),
-                        (*c.add(k)).into(),
-                    );
-                    dx = _mm256_add_pd(dx, _mm256_mul_pd(v, _mm256_set1_pd(bx[k])));
-                    dy = _mm256_add_pd(dy, _mm256_mul_pd(v, _mm256_set1_pd(by[k])));
+                R::fold_four(ax, xs.as_mut_ptr().add(j));
+                R::fold_four(ay, ys.as_mut_ptr().add(j));
+                for m in 0..4 {
+                    let column = self.column(j + m);
+                    (xs[j + m], ys[j + m]) = dot_tail(column, bx, by, full, (xs[j + m], ys[j + m]));
                 }
-                _mm256_storeu_pd(xs.as_mut_ptr().add(j), dx);
-                _mm256_storeu_pd(ys.as_mut_ptr().add(j), dy);
                 j += 4;
             }
             for j in j..cols {
@@ -266,43 +394,45 @@ pub(super) fn invert(values: &mut [f64], rows: usize, cols: usize) {
     }
 }
 
-/// (Σ c_k x_k, Σ c_k y_k) over c's length, in the order of the module docs.
+/// The sum of `lanes` by halves: (0 + 1) + (2 + 3) for four, and the two fours' sums added
+/// for eight, as [`Real::fold_four`] sums a register.
 #[inline(always)]
-fn dot<T: Value>(c: &[T], x: &[f64], y: &[f64]) -> (f64, f64) {
-    let (x, y) = (&x[..c.len()], &y[..c.len()]);
-    let full = c.len() / 4 * 4;
-    let (mut ax, mut ay) = ([0.0f64; 4], [0.0f64; 4]);
-    for ((c4, x4), y4) in c[..full]
-        .chunks_exact(4)
-        .zip(x.chunks_exact(4))
-        .zip(y.chunks_exact(4))
-    {
-        for l in 0..4 {
-            let v: f64 = c4[l].into();
-            ax[l] += v * x4[l];
-            ay[l] += v * y4[l];
+fn fold<R: Real>(lanes: &[R]) -> R {
+    match lanes {
+        [a] => *a,
+        _ => {
+            let (low, high) = lanes.split_at(lanes.len() / 2);
+            fold(low) + fold(high)
         }
     }
-    let folded = (
-        (ax[0] + ax[1]) + (ax[2] + ax[3]),
-        (ay[0] + ay[1]) + (ay[2] + ay[3]),
-    );
+}
+
+/// (Σ c_k x_k, Σ c_k y_k) over c's length, in the order of the module docs.
+#[inline(always)]
+fn dot<R: Real>(c: &[R], x: &[R], y: &[R]) -> (R, R) {
+    let (x, y, lanes) = (&x[..c.len()], &y[..c.len()], R::LANES);
+    let full = c.len() / lanes * lanes;
+    let (mut ax, mut ay) = ([R::default(); 8], [R::default(); 8]);
+    for ((c, x), y) in c[..full]
+        .chunks_exact(lanes)
+        .zip(x.chunks_exact(lanes))
+        .zip(y.chunks_exact(lanes))
+    {
+        for l in 0..lanes {
+            ax[l] += c[l] * x[l];
+            ay[l] += c[l] * y[l];
+        }
+    }
+    let folded = (fold(&ax[..lanes]), fold(&ay[..lanes]));
     dot_tail(c, x, y, full, folded)
 }
 
 /// A dot product's last elements, from `full` on, added in order to the folded lanes.
 #[inline(always)]
-fn dot_tail<T: Value>(
-    c: &[T],
-    x: &[f64],
-    y: &[f64],
-    full: usize,
-    (mut dx, mut dy): (f64, f64),
-) -> (f64, f64) {
+fn dot_tail<R: Real>(c: &[R], x: &[R], y: &[R], full: usize, (mut dx, mut dy): (R, R)) -> (R, R) {
     for k in full..c.len() {
-        let v: f64 = c[k].into();
-        dx += v * x[k];
-        dy += v * y[k];
+        dx += c[k] * x[k];
+        dy += c[k] * y[k];
     }
     (dx, dy)
 }
@@ -313,43 +443,23 @@ fn dot_tail<T: Value>(
 /// The CPU must support AVX; always inlined, this inherits AVX from its caller.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn dot_avx<T: Value>(c: &[T], x: &[f64], y: &[f64]) -> (f64, f64) {
-    let (x, y) = (&x[..c.len()], &y[..c.len()]);
-    let full = c.len() / 4 * 4;
+unsafe fn dot_avx<R: Real>(c: &[R], x: &[R], y: &[R]) -> (R, R) {
+    let (x, y, lanes) = (&x[..c.len()], &y[..c.len()], R::LANES);
+    let full = c.len() / lanes * lanes;
+    let mut folded = [R::default(); 4];
     // SAFETY: the caller guarantees AVX; the loads stay below `full` <= the three lengths.
-    let folded = unsafe {
-        let (mut ax, mut ay) = (_mm256_setzero_pd(), _mm256_setzero_pd());
+    unsafe {
+        let (mut ax, mut ay) = (R::zero(), R::zero());
         let mut k = 0;
         while k < full {
-            let v = T::load4(c.as_ptr().add(k));
-            ax = _mm256_add_pd(ax, _mm256_mul_pd(v, _mm256_loadu_pd(x.as_ptr().add(k))));
-            ay = _mm256_add_pd(ay, _mm256_mul_pd(v, _mm256_loadu_pd(y.as_ptr().add(k))));
-            k += 4;
+            let v = R::load(c.as_ptr().add(k));
+            ax = R::add_product(ax, v, R::load(x.as_ptr().add(k)));
+            ay = R::add_product(ay, v, R::load(y.as_ptr().add(k)));
+            k += lanes;
         }
-        // [(x0 + x1), (y0 + y1), (x2 + x3), (y2 + y3)], then the halves added.
-        let h = _mm256_hadd_pd(ax, ay);
-        let s = _mm_add_pd(_mm256_castpd256_pd128(h), _mm256_extractf128_pd(h, 1));
-        (_mm_cvtsd_f64(s), _mm_cvtsd_f64(_mm_unpackhi_pd(s, s)))
-    };
-    dot_tail(c, x, y, full, folded)
-}
-
-/// Four columns' four-lane sums folded as (0 + 1) + (2 + 3), one column to a lane.
-///
-/// # Safety
-/// The CPU must support AVX; always inlined, this inherits AVX from its caller.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-unsafe fn fold_four(a: [__m256d; 4]) -> __m256d {
-    // SAFETY: the caller guarantees AVX.
-    unsafe {
-        // [a0₀ + a0₁, a1₀ + a1₁, a0₂ + a0₃, a1₂ + a1₃], and the same for columns 2 and 3.
-        let h01 = _mm256_hadd_pd(a[0], a[1]);
-        let h23 = _mm256_hadd_pd(a[2], a[3]);
-        let low = _mm256_permute2f128_pd(h01, h23, 0x20);
-        let high = _mm256_permute2f128_pd(h01, h23, 0x31);
-        _mm256_add_pd(low, high)
+        R::fold_four([ax, ay, ax, ay], folded.as_mut_ptr());
     }
+    dot_tail(c, x, y, full, (folded[0], folded[1]))
 }
 
 #[cfg(test)]
@@ -426,34 +536,35 @@ mod tests {
         }
     }
 
-    /// Blocks of every shape that the AVX loops split differently (16, 4 and single rows; 4
-    /// and single columns), stored in f32 and in f64, give the portable kernels' bits.
+    /// Blocks of every shape that the AVX loops split differently (four registers, one and
+    /// single rows; four and single columns), in f32 and in f64, give the portable kernels'
+    /// bits.
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx_kernels_give_the_portable_bits() {
         if !super::super::wide::available() {
             return;
         }
-        check(|v| v as f32);
-        check(|v| v);
+        check::<f32>();
+        check::<f64>();
     }
 
     #[cfg(target_arch = "x86_64")]
-    fn check<T: Value>(store: fn(f64) -> T) {
+    fn check<R: Real>() {
         for cols in [1, 2, 3, 4, 5, 8, 9, 17] {
-            for p in [0, 1, 3, 4, 5, 15, 16, 17, 35] {
+            for p in [0, 1, 3, 4, 5, 7, 8, 15, 16, 17, 31, 32, 35, 41] {
                 let rows = cols + p;
-                let values: Vec<T> = (0..rows * cols).map(|i| store(value(i))).collect();
+                let values: Vec<R> = (0..rows * cols).map(|i| R::of(value(i))).collect();
                 let block = Block {
                     values: &values,
                     cols,
                     rows,
                 };
-                let xs: Vec<f64> = (0..cols).map(|j| value(j + 100)).collect();
-                let ys: Vec<f64> = (0..cols).map(|j| value(j + 200)).collect();
+                let xs: Vec<R> = (0..cols).map(|j| R::of(value(j + 100))).collect();
+                let ys: Vec<R> = (0..cols).map(|j| R::of(value(j + 200))).collect();
                 let run = |avx: bool| {
                     let (mut xs, mut ys) = (xs.clone(), ys.clone());
-                    let (mut bx, mut by) = (vec![9.0; rows], vec![9.0; rows]);
+                    let (mut bx, mut by) = (vec![R::of(9.0); rows], vec![R::of(9.0); rows]);
                     let mut v = (&mut xs[..], &mut ys[..], &mut bx[..], &mut by[..]);
                     if avx {
                         // SAFETY: the CPU has AVX, checked by the caller.
@@ -463,7 +574,7 @@ mod tests {
                         block.product::<false>(xs, ys, bx, by);
                         block.dots::<false>(bx, by, xs, ys);
                     }
-                    let bits = |v: &[f64]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
+                    let bits = |v: &[R]| v.iter().map(|f| f.get().to_bits()).collect::<Vec<_>>();
                     (bits(&bx), bits(&by), bits(&xs), bits(&ys))
                 };
                 assert_eq!(run(true), run(false), "{cols} columns, {p} pattern rows");
@@ -472,7 +583,7 @@ mod tests {
     }
 
     #[cfg(target_arch = "x86_64")]
-    type Vectors<'v> = (&'v mut [f64], &'v mut [f64], &'v mut [f64], &'v mut [f64]);
+    type Vectors<'v, R> = (&'v mut [R], &'v mut [R], &'v mut [R], &'v mut [R]);
 
     /// The AVX kernels, compiled for AVX.
     ///
@@ -480,7 +591,7 @@ mod tests {
     /// The CPU must support AVX.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
-    unsafe fn substitute_avx<T: Value>(block: &Block<T>, v: &mut Vectors) {
+    unsafe fn substitute_avx<R: Real>(block: &Block<R>, v: &mut Vectors<R>) {
         let (xs, ys, bx, by) = v;
         block.product::<true>(xs, ys, bx, by);
         block.dots::<true>(bx, by, xs, ys);
