@@ -49,3 +49,73 @@ fn spawn_like_bevy_and_join_by_the_click_rule() {
         solver.x()[2]
     );
 }
+
+/// What the sync makes of each kind of spring edit between ticks, with no particle added or
+/// removed: a spring spawned alone is packed, a changed rest length is patched in place, and a
+/// spring given another end is packed under its new ends. (The sync finds all three in one
+/// scan of the springs' change ticks.) A paused tick writes nothing back, yet a position set
+/// while paused is what the solver holds, and the steps after it are written back.
+#[test]
+fn spring_edits_alone_reach_the_solver() {
+    let mut app = hooke::headless_app();
+    app.world_mut().resource_mut::<SimParams>().paused = false;
+    let world = app.world_mut();
+    let at = |x: f64, y: f64| (Particle, Position(DVec2::new(x, y)));
+    let a = world.spawn((at(0.5, 0.9), Pinned)).id();
+    let b = world.spawn(at(0.5, 0.8)).id();
+    let c = world.spawn(at(0.6, 0.8)).id();
+    let first = world.spawn(Spring::new(a, b, 0.1, 1e3)).id();
+    advance(world, 10);
+    let ends = |world: &World| {
+        let solver = world.resource::<Solver>();
+        let index = |e: Entity| solver.entities().iter().position(|&p| p == e).unwrap() as u32;
+        let mut ends: Vec<(u32, u32, f64)> = solver
+            .springs()
+            .iter()
+            .map(|s| (s.a, s.b, s.rest))
+            .collect();
+        ends.sort_by(|p, q| p.partial_cmp(q).unwrap());
+        (ends, [index(a), index(b), index(c)])
+    };
+    assert_eq!(ends(world).0.len(), 1);
+    // A spring spawned alone.
+    world.spawn(Spring::new(b, c, 0.1, 1e3));
+    advance(world, 1);
+    let (got, [ia, ib, ic]) = ends(world);
+    assert_eq!(
+        got,
+        vec![(ia, ib, 0.1), (ib, ic, 0.1)],
+        "the new spring is packed"
+    );
+    // A rest length changed.
+    world.get_mut::<Spring>(first).unwrap().rest = 0.05;
+    advance(world, 1);
+    assert_eq!(
+        ends(world).0,
+        vec![(ia, ib, 0.05), (ib, ic, 0.1)],
+        "patched"
+    );
+    // An end changed.
+    world.get_mut::<Spring>(first).unwrap().b = c;
+    advance(world, 1);
+    let (got, [ia, ib, ic]) = ends(world);
+    assert_eq!(
+        got,
+        vec![(ia, ic, 0.05), (ib, ic, 0.1)],
+        "packed under its new ends"
+    );
+    // Paused: a position set between ticks reaches the solver and stays in the component.
+    world.resource_mut::<SimParams>().paused = true;
+    world.get_mut::<Position>(c).unwrap().0 = DVec2::new(0.7, 0.7);
+    world.run_schedule(bevy::app::FixedMain);
+    world.run_schedule(bevy::app::FixedMain);
+    let solver = world.resource::<Solver>();
+    assert_eq!(solver.x()[ic as usize], DVec2::new(0.7, 0.7));
+    assert_eq!(world.get::<Position>(c).unwrap().0, DVec2::new(0.7, 0.7));
+    // Running again, the steps are written back.
+    world.resource_mut::<SimParams>().paused = false;
+    advance(world, 5);
+    let moved = world.resource::<Solver>().x()[ic as usize];
+    assert_ne!(moved, DVec2::new(0.7, 0.7));
+    assert_eq!(world.get::<Position>(c).unwrap().0, moved);
+}

@@ -16,11 +16,12 @@ use bevy::ecs::system::SystemParam;
 use bevy::math::DVec2;
 use bevy::prelude::*;
 
-/// Signals that the set of particles or springs changed since the last sync.
+/// Signals that the set of particles or springs changed since the last sync. (An added spring
+/// is found by the scan of changed springs in [`Edits`], which sees it as changed too: one scan
+/// of the springs' change ticks a tick, not two.)
 #[derive(SystemParam)]
 pub struct StructureChanges<'w, 's> {
     added_particles: Query<'w, 's, (), Added<Particle>>,
-    added_springs: Query<'w, 's, (), Added<Spring>>,
     added_pins: Query<'w, 's, (), Added<Pinned>>,
     removed_particles: RemovedComponents<'w, 's, Particle>,
     removed_springs: RemovedComponents<'w, 's, Spring>,
@@ -33,10 +34,7 @@ impl StructureChanges<'_, '_> {
         let removed = self.removed_particles.read().count()
             + self.removed_springs.read().count()
             + self.removed_pins.read().count();
-        removed > 0
-            || !self.added_particles.is_empty()
-            || !self.added_springs.is_empty()
-            || !self.added_pins.is_empty()
+        removed > 0 || !self.added_particles.is_empty() || !self.added_pins.is_empty()
     }
 }
 
@@ -63,6 +61,9 @@ type ParticleEdited = Or<(
     Added<Kinematic>,
 )>;
 
+/// A spring added or changed.
+type SpringEdited = (Changed<Spring>, Without<Particle>);
+
 /// What changed since the last sync, found by filtered scans (they read change ticks, not
 /// components, for the entities that did not change): a tick of a big scene with nothing
 /// edited costs about one pass over the ticks.
@@ -71,7 +72,8 @@ pub struct Edits<'w, 's> {
     particles: Query<'w, 's, Entity, (With<Particle>, ParticleEdited)>,
     released: RemovedComponents<'w, 's, Kinematic>,
     held: Query<'w, 's, (), (With<Particle>, With<Kinematic>)>,
-    springs: Query<'w, 's, Entity, (Changed<Spring>, Without<Particle>)>,
+    /// Springs added or changed (an added component counts as changed).
+    springs: Query<'w, 's, (Entity, Ref<'static, Spring>), SpringEdited>,
 }
 
 /// Brings ECS edits into the solver. Runs at the start of every fixed tick.
@@ -83,11 +85,32 @@ pub fn sync_into_solver(
     springs: Springs,
     mut edits: Edits,
 ) {
-    if structure.any() {
+    let repack = |solver: &mut Solver, particles: &mut Particles, edits: &mut Edits| {
         edits.released.clear();
-        rebuild(&mut solver, &mut particles, &springs);
+        rebuild(solver, particles, &springs);
         solver.apply_stiffness_override(params.stiffness_override);
+    };
+    if structure.any() {
+        repack(&mut solver, &mut particles, &mut edits);
         return;
+    }
+    // The springs' edits first, in the one scan of their change ticks: an added spring (or one
+    // whose ends changed) repacks everything, the rest are patched in place.
+    let mut springs_changed = false;
+    for (e, spring) in &edits.springs {
+        springs_changed = true;
+        let end = |e: Entity| particles.get(e).ok().map(|p| p.8.0);
+        let packed = (end(spring.a).zip(end(spring.b)))
+            .and_then(|(a, b)| solver.find_spring(a, b, e))
+            .filter(|_| !spring.is_added());
+        let Some(si) = packed else {
+            // New, or not packed under these ends (they changed, or one was missing at the
+            // last rebuild).
+            repack(&mut solver, &mut particles, &mut edits);
+            return;
+        };
+        solver.springs[si].rest = spring.rest;
+        solver.set_own_stiffness(si, spring.stiffness);
     }
     let mut external_changed = false;
     let released: Vec<Entity> = edits.released.read().collect();
@@ -125,28 +148,6 @@ pub fn sync_into_solver(
     }
     if external_changed {
         solver.refresh_external();
-    }
-    let mut springs_changed = false;
-    let mut endpoints_changed = false;
-    for e in &edits.springs {
-        let Ok((_, spring)) = springs.get(e) else {
-            continue;
-        };
-        springs_changed = true;
-        let end = |e: Entity| particles.get(e).ok().map(|p| p.8.0);
-        let packed =
-            (end(spring.a).zip(end(spring.b))).and_then(|(a, b)| solver.find_spring(a, b, e));
-        let Some(si) = packed else {
-            // Not packed under these ends (they changed, or one was missing at the last
-            // rebuild): repack.
-            endpoints_changed = true;
-            continue;
-        };
-        solver.springs[si].rest = spring.rest;
-        solver.set_own_stiffness(si, spring.stiffness);
-    }
-    if endpoints_changed {
-        rebuild(&mut solver, &mut particles, &springs);
     }
     if springs_changed || solver.applied_override != params.stiffness_override {
         solver.apply_stiffness_override(params.stiffness_override);
