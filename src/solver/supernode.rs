@@ -74,6 +74,43 @@ pub(crate) trait Real:
     unsafe fn fold_four(a: [Self::V; 4], out: *mut Self);
 }
 
+/// [`Real`]'s register operations for one precision, from the AVX intrinsics that do them
+/// (zero, set1, loadu, storeu, add, mul).
+macro_rules! register_ops {
+    ($t:ty, $v:ty: $zero:ident, $splat:ident, $load:ident, $store:ident, $add:ident, $mul:ident) => {
+        #[cfg(target_arch = "x86_64")]
+        #[inline(always)]
+        unsafe fn zero() -> $v {
+            // SAFETY: the caller's.
+            unsafe { $zero() }
+        }
+        #[cfg(target_arch = "x86_64")]
+        #[inline(always)]
+        unsafe fn splat(v: $t) -> $v {
+            // SAFETY: the caller's.
+            unsafe { $splat(v) }
+        }
+        #[cfg(target_arch = "x86_64")]
+        #[inline(always)]
+        unsafe fn load(p: *const $t) -> $v {
+            // SAFETY: the caller's.
+            unsafe { $load(p) }
+        }
+        #[cfg(target_arch = "x86_64")]
+        #[inline(always)]
+        unsafe fn store(p: *mut $t, v: $v) {
+            // SAFETY: the caller's.
+            unsafe { $store(p, v) }
+        }
+        #[cfg(target_arch = "x86_64")]
+        #[inline(always)]
+        unsafe fn add_product(a: $v, b: $v, c: $v) -> $v {
+            // SAFETY: the caller's.
+            unsafe { $add(a, $mul(b, c)) }
+        }
+    };
+}
+
 impl Real for f32 {
     const LANES: usize = 8;
     #[cfg(target_arch = "x86_64")]
@@ -86,35 +123,9 @@ impl Real for f32 {
     fn get(self) -> f64 {
         self.into()
     }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn zero() -> __m256 {
-        // SAFETY: the caller's.
-        unsafe { _mm256_setzero_ps() }
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn splat(v: f32) -> __m256 {
-        // SAFETY: the caller's.
-        unsafe { _mm256_set1_ps(v) }
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn load(p: *const f32) -> __m256 {
-        // SAFETY: the caller's.
-        unsafe { _mm256_loadu_ps(p) }
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn store(p: *mut f32, v: __m256) {
-        // SAFETY: the caller's.
-        unsafe { _mm256_storeu_ps(p, v) }
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn add_product(a: __m256, b: __m256, c: __m256) -> __m256 {
-        // SAFETY: the caller's.
-        unsafe { _mm256_add_ps(a, _mm256_mul_ps(b, c)) }
+    register_ops! {
+        f32, __m256: _mm256_setzero_ps, _mm256_set1_ps, _mm256_loadu_ps, _mm256_storeu_ps,
+        _mm256_add_ps, _mm256_mul_ps
     }
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
@@ -145,35 +156,9 @@ impl Real for f64 {
     fn get(self) -> f64 {
         self
     }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn zero() -> __m256d {
-        // SAFETY: the caller's.
-        unsafe { _mm256_setzero_pd() }
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn splat(v: f64) -> __m256d {
-        // SAFETY: the caller's.
-        unsafe { _mm256_set1_pd(v) }
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn load(p: *const f64) -> __m256d {
-        // SAFETY: the caller's.
-        unsafe { _mm256_loadu_pd(p) }
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn store(p: *mut f64, v: __m256d) {
-        // SAFETY: the caller's.
-        unsafe { _mm256_storeu_pd(p, v) }
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn add_product(a: __m256d, b: __m256d, c: __m256d) -> __m256d {
-        // SAFETY: the caller's.
-        unsafe { _mm256_add_pd(a, _mm256_mul_pd(b, c)) }
+    register_ops! {
+        f64, __m256d: _mm256_setzero_pd, _mm256_set1_pd, _mm256_loadu_pd, _mm256_storeu_pd,
+        _mm256_add_pd, _mm256_mul_pd
     }
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
