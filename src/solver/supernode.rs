@@ -17,9 +17,10 @@
 //! * the back substitution takes four columns' dot products at once, eight independent sums,
 //!   so no add waits on the one before it.
 //!
-//! A dot product here sums in a register's lanes (element k in lane k mod [`Real::LANES`], over
-//! whole registers), folds them by halves ([`fold`]), and then adds the last elements in
-//! order.
+//! A dot product here sums in a register's lanes (element k in lane k mod [`Real::LANES`], the
+//! last register's missing elements as zeros, which the AVX forms read with masked loads) and
+//! folds them by halves ([`fold`]). A block's last rows, fewer than a register, are one masked
+//! register too.
 
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
@@ -69,10 +70,23 @@ pub(crate) trait Real:
     /// a + b · c, the product rounded and then the sum (never fused).
     #[cfg(target_arch = "x86_64")]
     unsafe fn add_product(a: Self::V, b: Self::V, c: Self::V) -> Self::V;
+    /// The first `n` < LANES values from `p` (only those are read), the other lanes zero.
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn load_first(p: *const Self, n: usize) -> Self::V;
+    /// The first `n` < LANES lanes to `p` (only those are written).
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn store_first(p: *mut Self, v: Self::V, n: usize);
     /// Each of four registers' lanes summed as [`fold`] sums them, into `out[0..4]`.
     #[cfg(target_arch = "x86_64")]
     unsafe fn fold_four(a: [Self::V; 4], out: *mut Self);
 }
+
+/// Lane masks for [`Real::load_first`]: the `LANES` words from `LANES - n` have their first n
+/// set.
+#[cfg(target_arch = "x86_64")]
+static MASK32: [i32; 16] = [-1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0, 0];
+#[cfg(target_arch = "x86_64")]
+static MASK64: [i64; 8] = [-1, -1, -1, -1, 0, 0, 0, 0];
 
 /// [`Real`]'s register operations for one precision, from the AVX intrinsics that do them
 /// (zero, set1, loadu, storeu, add, mul).
@@ -129,6 +143,24 @@ impl Real for f32 {
     }
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
+    unsafe fn load_first(p: *const f32, n: usize) -> __m256 {
+        // SAFETY: the caller's; the mask's load reads MASK32[8 - n .. 16 - n].
+        unsafe {
+            let mask = _mm256_loadu_si256(MASK32.as_ptr().add(8 - n).cast());
+            _mm256_maskload_ps(p, mask)
+        }
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn store_first(p: *mut f32, v: __m256, n: usize) {
+        // SAFETY: the caller's; the mask's load reads MASK32[8 - n .. 16 - n].
+        unsafe {
+            let mask = _mm256_loadu_si256(MASK32.as_ptr().add(8 - n).cast());
+            _mm256_maskstore_ps(p, mask, v)
+        }
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
     unsafe fn fold_four(a: [__m256; 4], out: *mut f32) {
         // SAFETY: the caller's.
         unsafe {
@@ -159,6 +191,24 @@ impl Real for f64 {
     register_ops! {
         f64, __m256d: _mm256_setzero_pd, _mm256_set1_pd, _mm256_loadu_pd, _mm256_storeu_pd,
         _mm256_add_pd, _mm256_mul_pd
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn load_first(p: *const f64, n: usize) -> __m256d {
+        // SAFETY: the caller's; the mask's load reads MASK64[4 - n .. 8 - n].
+        unsafe {
+            let mask = _mm256_loadu_si256(MASK64.as_ptr().add(4 - n).cast());
+            _mm256_maskload_pd(p, mask)
+        }
+    }
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn store_first(p: *mut f64, v: __m256d, n: usize) {
+        // SAFETY: the caller's; the mask's load reads MASK64[4 - n .. 8 - n].
+        unsafe {
+            let mask = _mm256_loadu_si256(MASK64.as_ptr().add(4 - n).cast());
+            _mm256_maskstore_pd(p, mask, v)
+        }
     }
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
@@ -273,16 +323,18 @@ impl<'a, R: Real> Block<'a, R> {
                 R::store(by.as_mut_ptr().add(k), ay);
                 k += lanes;
             }
-        }
-        for k in k..rows {
-            let (mut x, mut y) = (R::default(), R::default());
-            for j in 0..cols {
-                let v = self.values[j * rows + k];
-                x += v * xs[j];
-                y += v * ys[j];
+            // The last rows, fewer than a register's lanes: the same sums, row by row.
+            let n = rows - k;
+            if n > 0 {
+                let (mut ax, mut ay) = (R::zero(), R::zero());
+                for j in 0..cols {
+                    let v = R::load_first(l.add(j * rows + k), n);
+                    ax = R::add_product(ax, v, R::splat(xs[j]));
+                    ay = R::add_product(ay, v, R::splat(ys[j]));
+                }
+                R::store_first(bx.as_mut_ptr().add(k), ax, n);
+                R::store_first(by.as_mut_ptr().add(k), ay, n);
             }
-            bx[k] = x;
-            by[k] = y;
         }
     }
 
@@ -296,7 +348,7 @@ impl<'a, R: Real> Block<'a, R> {
         let (cols, rows, lanes) = (self.cols, self.rows, R::LANES);
         assert!(xs.len() >= cols && ys.len() >= cols && bx.len() >= rows && by.len() >= rows);
         assert!(self.values.len() >= cols * rows);
-        let (l, full) = (self.values.as_ptr(), rows / lanes * lanes);
+        let (l, full, last) = (self.values.as_ptr(), rows / lanes * lanes, rows % lanes);
         let mut j = 0;
         // SAFETY: the caller guarantees AVX; the loads read columns j .. j + 4 <= cols at rows
         // k .. k + lanes <= rows, bx, by at k .. k + lanes <= rows, and the folds write xs, ys
@@ -316,12 +368,19 @@ impl<'a, R: Real> Block<'a, R> {
                     }
                     k += lanes;
                 }
+                if last > 0 {
+                    let (u, w) = (
+                        R::load_first(bx.as_ptr().add(full), last),
+                        R::load_first(by.as_ptr().add(full), last),
+                    );
+                    for m in 0..4 {
+                        let v = R::load_first(c.add(m * rows + full), last);
+                        ax[m] = R::add_product(ax[m], v, u);
+                        ay[m] = R::add_product(ay[m], v, w);
+                    }
+                }
                 R::fold_four(ax, xs.as_mut_ptr().add(j));
                 R::fold_four(ay, ys.as_mut_ptr().add(j));
-                for m in 0..4 {
-                    let column = self.column(j + m);
-                    (xs[j + m], ys[j + m]) = dot_tail(column, bx, by, full, (xs[j + m], ys[j + m]));
-                }
                 j += 4;
             }
             for j in j..cols {
@@ -396,30 +455,19 @@ fn fold<R: Real>(lanes: &[R]) -> R {
 #[inline(always)]
 fn dot<R: Real>(c: &[R], x: &[R], y: &[R]) -> (R, R) {
     let (x, y, lanes) = (&x[..c.len()], &y[..c.len()], R::LANES);
-    let full = c.len() / lanes * lanes;
     let (mut ax, mut ay) = ([R::default(); 8], [R::default(); 8]);
-    for ((c, x), y) in c[..full]
-        .chunks_exact(lanes)
-        .zip(x.chunks_exact(lanes))
-        .zip(y.chunks_exact(lanes))
-    {
+    for start in (0..c.len()).step_by(lanes) {
         for l in 0..lanes {
-            ax[l] += c[l] * x[l];
-            ay[l] += c[l] * y[l];
+            // Past the end, a lane adds 0 · 0, as the AVX form's masked load gives it.
+            let (c, x, y) = match c.get(start + l) {
+                Some(&c) => (c, x[start + l], y[start + l]),
+                None => (R::default(), R::default(), R::default()),
+            };
+            ax[l] += c * x;
+            ay[l] += c * y;
         }
     }
-    let folded = (fold(&ax[..lanes]), fold(&ay[..lanes]));
-    dot_tail(c, x, y, full, folded)
-}
-
-/// A dot product's last elements, from `full` on, added in order to the folded lanes.
-#[inline(always)]
-fn dot_tail<R: Real>(c: &[R], x: &[R], y: &[R], full: usize, (mut dx, mut dy): (R, R)) -> (R, R) {
-    for k in full..c.len() {
-        dx += c[k] * x[k];
-        dy += c[k] * y[k];
-    }
-    (dx, dy)
+    (fold(&ax[..lanes]), fold(&ay[..lanes]))
 }
 
 /// [`dot`] with AVX.
@@ -430,9 +478,9 @@ fn dot_tail<R: Real>(c: &[R], x: &[R], y: &[R], full: usize, (mut dx, mut dy): (
 #[inline(always)]
 unsafe fn dot_avx<R: Real>(c: &[R], x: &[R], y: &[R]) -> (R, R) {
     let (x, y, lanes) = (&x[..c.len()], &y[..c.len()], R::LANES);
-    let full = c.len() / lanes * lanes;
+    let (full, last) = (c.len() / lanes * lanes, c.len() % lanes);
     let mut folded = [R::default(); 4];
-    // SAFETY: the caller guarantees AVX; the loads stay below `full` <= the three lengths.
+    // SAFETY: the caller guarantees AVX; the loads stay below the three lengths.
     unsafe {
         let (mut ax, mut ay) = (R::zero(), R::zero());
         let mut k = 0;
@@ -442,9 +490,14 @@ unsafe fn dot_avx<R: Real>(c: &[R], x: &[R], y: &[R]) -> (R, R) {
             ay = R::add_product(ay, v, R::load(y.as_ptr().add(k)));
             k += lanes;
         }
+        if last > 0 {
+            let v = R::load_first(c.as_ptr().add(full), last);
+            ax = R::add_product(ax, v, R::load_first(x.as_ptr().add(full), last));
+            ay = R::add_product(ay, v, R::load_first(y.as_ptr().add(full), last));
+        }
         R::fold_four([ax, ay, ax, ay], folded.as_mut_ptr());
     }
-    dot_tail(c, x, y, full, (folded[0], folded[1]))
+    (folded[0], folded[1])
 }
 
 #[cfg(test)]
@@ -521,9 +574,9 @@ mod tests {
         }
     }
 
-    /// Blocks of every shape that the AVX loops split differently (four registers, one and
-    /// single rows; four and single columns), in f32 and in f64, give the portable kernels'
-    /// bits.
+    /// Blocks of every shape that the AVX loops split differently (four registers of rows, one,
+    /// and a masked last one; four columns and single ones), in f32 and in f64, give the
+    /// portable kernels' bits, and write nothing past their rows.
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx_kernels_give_the_portable_bits() {
@@ -549,8 +602,10 @@ mod tests {
                 let ys: Vec<R> = (0..cols).map(|j| R::of(value(j + 200))).collect();
                 let run = |avx: bool| {
                     let (mut xs, mut ys) = (xs.clone(), ys.clone());
-                    let (mut bx, mut by) = (vec![R::of(9.0); rows], vec![R::of(9.0); rows]);
-                    let mut v = (&mut xs[..], &mut ys[..], &mut bx[..], &mut by[..]);
+                    // A register's worth past the rows, which the masked stores must leave.
+                    let pad = rows + R::LANES;
+                    let (mut bx, mut by) = (vec![R::of(9.0); pad], vec![R::of(9.0); pad]);
+                    let mut v = (&mut xs[..], &mut ys[..], &mut bx[..rows], &mut by[..rows]);
                     if avx {
                         // SAFETY: the CPU has AVX, checked by the caller.
                         unsafe { substitute_avx(&block, &mut v) };
@@ -559,8 +614,13 @@ mod tests {
                         block.product::<false>(xs, ys, bx, by);
                         block.dots::<false>(bx, by, xs, ys);
                     }
+                    let past = bx[rows..].iter().chain(&by[rows..]);
+                    assert!(
+                        past.into_iter().all(|&v| v == R::of(9.0)),
+                        "written past the rows"
+                    );
                     let bits = |v: &[R]| v.iter().map(|f| f.get().to_bits()).collect::<Vec<_>>();
-                    (bits(&bx), bits(&by), bits(&xs), bits(&ys))
+                    (bits(&bx[..rows]), bits(&by[..rows]), bits(&xs), bits(&ys))
                 };
                 assert_eq!(run(true), run(false), "{cols} columns, {p} pattern rows");
             }
