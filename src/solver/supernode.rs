@@ -89,9 +89,12 @@ static MASK32: [i32; 16] = [-1, -1, -1, -1, -1, -1, -1, -1, 0, 0, 0, 0, 0, 0, 0,
 static MASK64: [i64; 8] = [-1, -1, -1, -1, 0, 0, 0, 0];
 
 /// [`Real`]'s register operations for one precision, from the AVX intrinsics that do them
-/// (zero, set1, loadu, storeu, add, mul).
+/// (zero, set1, loadu, storeu, add, mul; and the masked load and store with their mask table).
 macro_rules! register_ops {
-    ($t:ty, $v:ty: $zero:ident, $splat:ident, $load:ident, $store:ident, $add:ident, $mul:ident) => {
+    (
+        $t:ty, $v:ty: $zero:ident, $splat:ident, $load:ident, $store:ident, $add:ident, $mul:ident;
+        masked by $masks:ident: $mask_load:ident, $mask_store:ident
+    ) => {
         #[cfg(target_arch = "x86_64")]
         #[inline(always)]
         unsafe fn zero() -> $v {
@@ -122,6 +125,25 @@ macro_rules! register_ops {
             // SAFETY: the caller's.
             unsafe { $add(a, $mul(b, c)) }
         }
+        #[cfg(target_arch = "x86_64")]
+        #[inline(always)]
+        unsafe fn load_first(p: *const $t, n: usize) -> $v {
+            // SAFETY: the caller's; the mask's load reads the table's LANES words from
+            // LANES - n, within its 2 LANES.
+            unsafe {
+                let mask = _mm256_loadu_si256($masks.as_ptr().add(Self::LANES - n).cast());
+                $mask_load(p, mask)
+            }
+        }
+        #[cfg(target_arch = "x86_64")]
+        #[inline(always)]
+        unsafe fn store_first(p: *mut $t, v: $v, n: usize) {
+            // SAFETY: as for `load_first`.
+            unsafe {
+                let mask = _mm256_loadu_si256($masks.as_ptr().add(Self::LANES - n).cast());
+                $mask_store(p, mask, v)
+            }
+        }
     };
 }
 
@@ -139,25 +161,7 @@ impl Real for f32 {
     }
     register_ops! {
         f32, __m256: _mm256_setzero_ps, _mm256_set1_ps, _mm256_loadu_ps, _mm256_storeu_ps,
-        _mm256_add_ps, _mm256_mul_ps
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn load_first(p: *const f32, n: usize) -> __m256 {
-        // SAFETY: the caller's; the mask's load reads MASK32[8 - n .. 16 - n].
-        unsafe {
-            let mask = _mm256_loadu_si256(MASK32.as_ptr().add(8 - n).cast());
-            _mm256_maskload_ps(p, mask)
-        }
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn store_first(p: *mut f32, v: __m256, n: usize) {
-        // SAFETY: the caller's; the mask's load reads MASK32[8 - n .. 16 - n].
-        unsafe {
-            let mask = _mm256_loadu_si256(MASK32.as_ptr().add(8 - n).cast());
-            _mm256_maskstore_ps(p, mask, v)
-        }
+        _mm256_add_ps, _mm256_mul_ps; masked by MASK32: _mm256_maskload_ps, _mm256_maskstore_ps
     }
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
@@ -190,25 +194,7 @@ impl Real for f64 {
     }
     register_ops! {
         f64, __m256d: _mm256_setzero_pd, _mm256_set1_pd, _mm256_loadu_pd, _mm256_storeu_pd,
-        _mm256_add_pd, _mm256_mul_pd
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn load_first(p: *const f64, n: usize) -> __m256d {
-        // SAFETY: the caller's; the mask's load reads MASK64[4 - n .. 8 - n].
-        unsafe {
-            let mask = _mm256_loadu_si256(MASK64.as_ptr().add(4 - n).cast());
-            _mm256_maskload_pd(p, mask)
-        }
-    }
-    #[cfg(target_arch = "x86_64")]
-    #[inline(always)]
-    unsafe fn store_first(p: *mut f64, v: __m256d, n: usize) {
-        // SAFETY: the caller's; the mask's load reads MASK64[4 - n .. 8 - n].
-        unsafe {
-            let mask = _mm256_loadu_si256(MASK64.as_ptr().add(4 - n).cast());
-            _mm256_maskstore_pd(p, mask, v)
-        }
+        _mm256_add_pd, _mm256_mul_pd; masked by MASK64: _mm256_maskload_pd, _mm256_maskstore_pd
     }
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
