@@ -405,7 +405,7 @@ impl Factor {
             ahead.forward(T::stored(self), self.values[s] + block.values.len());
             let (lo, x, y) = (span.lo, &mut *span.x, &mut *span.y);
             let (xs, ys) = (&mut x[start - lo..end - lo], &mut y[start - lo..end - lo]);
-            let (bx, by) = below.rows(block.rows);
+            let (bx, by) = below.rows_with_room(block.rows);
             block.product::<AVX>(xs, ys, bx, by);
             let ((ux, bx), (uy, by)) = (bx.split_at(block.cols), by.split_at(block.cols));
             xs.copy_from_slice(ux);
@@ -579,11 +579,24 @@ impl<R: Real> Below<R> {
     /// The first `n` values of x and y, grown if need be (their old values are left).
     #[inline(always)]
     fn rows(&mut self, n: usize) -> (&mut [R], &mut [R]) {
+        self.room(n);
+        (&mut self.x[..n], &mut self.y[..n])
+    }
+
+    /// The first `n` values of x and y and a register's worth more, for a product to store
+    /// its last register whole ([`Block::product`]).
+    #[inline(always)]
+    fn rows_with_room(&mut self, n: usize) -> (&mut [R], &mut [R]) {
+        let n = n + R::LANES;
+        self.room(n);
+        (&mut self.x[..n], &mut self.y[..n])
+    }
+
+    fn room(&mut self, n: usize) {
         if self.x.len() < n {
             self.x.resize(n, R::default());
             self.y.resize(n, R::default());
         }
-        (&mut self.x[..n], &mut self.y[..n])
     }
 }
 

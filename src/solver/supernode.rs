@@ -230,7 +230,8 @@ impl<'a, R: Real> Block<'a, R> {
 
     /// (bx, by)[k] = Σ_j B[k, j] (xs, ys)[j] for every row k, summed over j in order from 0:
     /// the forward substitution of the supernode (its solution, then its updates of the rows
-    /// below).
+    /// below). Rows of bx and by past the block's may be overwritten (with zeros) up to the next
+    /// register boundary, where the buffers are that long.
     #[inline(always)]
     pub fn product<const AVX: bool>(&self, xs: &[R], ys: &[R], bx: &mut [R], by: &mut [R]) {
         #[cfg(target_arch = "x86_64")]
@@ -318,8 +319,15 @@ impl<'a, R: Real> Block<'a, R> {
                     ax = R::add_product(ax, v, R::splat(xs[j]));
                     ay = R::add_product(ay, v, R::splat(ys[j]));
                 }
-                R::store_first(bx.as_mut_ptr().add(k), ax, n);
-                R::store_first(by.as_mut_ptr().add(k), ay, n);
+                // A whole register where the buffers have room for it (a masked store is
+                // slow on AMD's cores), else the first n lanes.
+                if bx.len().min(by.len()) >= k + lanes {
+                    R::store(bx.as_mut_ptr().add(k), ax);
+                    R::store(by.as_mut_ptr().add(k), ay);
+                } else {
+                    R::store_first(bx.as_mut_ptr().add(k), ax, n);
+                    R::store_first(by.as_mut_ptr().add(k), ay, n);
+                }
             }
         }
     }
@@ -562,7 +570,7 @@ mod tests {
 
     /// Blocks of every shape that the AVX loops split differently (four registers of rows, one,
     /// and a masked last one; four columns and single ones), in f32 and in f64, give the
-    /// portable kernels' bits, and write nothing past their rows.
+    /// portable kernels' bits, and write nothing past their rows unless the buffers have room.
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx_kernels_give_the_portable_bits() {
@@ -586,12 +594,14 @@ mod tests {
                 };
                 let xs: Vec<R> = (0..cols).map(|j| R::of(value(j + 100))).collect();
                 let ys: Vec<R> = (0..cols).map(|j| R::of(value(j + 200))).collect();
-                let run = |avx: bool| {
+                // `room`: the buffers a register longer than the rows, which the product may
+                // then write whole; without it nothing past the rows may change.
+                let run = |avx: bool, room: bool| {
                     let (mut xs, mut ys) = (xs.clone(), ys.clone());
-                    // A register's worth past the rows, which the masked stores must leave.
                     let pad = rows + R::LANES;
                     let (mut bx, mut by) = (vec![R::of(9.0); pad], vec![R::of(9.0); pad]);
-                    let mut v = (&mut xs[..], &mut ys[..], &mut bx[..rows], &mut by[..rows]);
+                    let len = if room { pad } else { rows };
+                    let mut v = (&mut xs[..], &mut ys[..], &mut bx[..len], &mut by[..len]);
                     if avx {
                         // SAFETY: the CPU has AVX, checked by the caller.
                         unsafe { substitute_avx(&block, &mut v) };
@@ -602,13 +612,17 @@ mod tests {
                     }
                     let past = bx[rows..].iter().chain(&by[rows..]);
                     assert!(
-                        past.into_iter().all(|&v| v == R::of(9.0)),
+                        room || past.into_iter().all(|&v| v == R::of(9.0)),
                         "written past the rows"
                     );
                     let bits = |v: &[R]| v.iter().map(|f| f.get().to_bits()).collect::<Vec<_>>();
                     (bits(&bx[..rows]), bits(&by[..rows]), bits(&xs), bits(&ys))
                 };
-                assert_eq!(run(true), run(false), "{cols} columns, {p} pattern rows");
+                let portable = run(false, false);
+                for room in [false, true] {
+                    let shape = format!("{cols} columns, {p} pattern rows, room {room}");
+                    assert_eq!(run(true, room), portable, "{shape}");
+                }
             }
         }
     }
