@@ -875,8 +875,8 @@ mod tests {
             let mut x: Vec<f64> = fwd.iter().map(|&r| b[r].0).collect();
             let mut y: Vec<f64> = fwd.iter().map(|&r| b[r].1).collect();
             solve(&f, &mut x, &mut y, &one);
-            // With the values in f64 a solve is good to round-off; rounded to f32, to about
-            // 1e-7 ...
+            // In f64 a solve is good to round-off; in f32 (values and arithmetic), to about
+            // 1e-6 ...
             let error = |x: &[f64], y: &[f64]| {
                 fwd.iter()
                     .enumerate()
