@@ -206,44 +206,18 @@ impl Factor {
     /// the same arithmetic, so the same bits, on any thread count).
     ///
     /// # Panics
-    /// If `R` is not the precision of the factor's values ([`Self::single_precision`]).
-    pub fn solve<R: Stored>(
-        &self,
-        x: &mut [R],
-        y: &mut [R],
-        work: &mut Substitution<R>,
-        threads: &Threads,
-    ) {
-        assert!(
-            R::stored(self).len() == self.len(),
-            "a solve in the factor's precision"
-        );
-        self.solve_in(x, y, work, threads);
-    }
-
-    /// The parts of the elimination tree that a solve runs at once on two or more threads: 2,
-    /// or 1 when the tree does not split into halves of nearly equal work or the factor is too
-    /// small to share ([`PARALLEL_MIN_VALUES`]); 0 for an empty factor.
-    pub fn halves(&self) -> usize {
-        match (self.supernodes(), &self.split) {
-            (0, _) => 0,
-            (_, Some(_)) if self.len() >= PARALLEL_MIN_VALUES => 2,
-            _ => 1,
-        }
-    }
-
-    /// Whether the values are f32, and so the solves' right-hand sides and arithmetic.
-    pub fn single_precision(&self) -> bool {
-        !self.single.is_empty()
-    }
-
-    fn solve_in<T: Stored>(
+    /// If `T` is not the precision of the factor's values ([`Self::single_precision`]).
+    pub fn solve<T: Stored>(
         &self,
         x: &mut [T],
         y: &mut [T],
         work: &mut Substitution<T>,
         threads: &Threads,
     ) {
+        assert!(
+            T::stored(self).len() == self.len(),
+            "a solve in the factor's precision"
+        );
         let Some(split) = &self.split else {
             let mut all = Span { lo: 0, x, y };
             self.forward::<T>(0..self.supernodes(), &mut all, &mut work.below[0], None);
@@ -311,6 +285,22 @@ impl Factor {
             || self.backward::<T>(ga.supernodes().rev(), &mut a, below_a, Some((split, top))),
             || self.backward::<T>(gb.supernodes().rev(), &mut b, below_b, Some((split, top))),
         );
+    }
+
+    /// The parts of the elimination tree that a solve runs at once on two or more threads: 2,
+    /// or 1 when the tree does not split into halves of nearly equal work or the factor is too
+    /// small to share ([`PARALLEL_MIN_VALUES`]); 0 for an empty factor.
+    pub fn halves(&self) -> usize {
+        match (self.supernodes(), &self.split) {
+            (0, _) => 0,
+            (_, Some(_)) if self.len() >= PARALLEL_MIN_VALUES => 2,
+            _ => 1,
+        }
+    }
+
+    /// Whether the values are f32, and so the solves' right-hand sides and arithmetic.
+    pub fn single_precision(&self) -> bool {
+        !self.single.is_empty()
     }
 
     /// The factor's stored values.
@@ -935,17 +925,21 @@ mod tests {
         }
     }
 
-    /// A solve of f64 right-hand sides, in the factor's precision.
+    /// A solve of f64 right-hand sides, rounded to the factor's precision and back.
     fn solve(f: &Factor, x: &mut [f64], y: &mut [f64], threads: &Threads) {
-        if !f.single_precision() {
-            f.solve(x, y, &mut Substitution::default(), threads);
-            return;
+        if f.single_precision() {
+            solve_in::<f32>(f, x, y, threads);
+        } else {
+            solve_in::<f64>(f, x, y, threads);
         }
-        let round = |v: &[f64]| v.iter().map(|&v| v as f32).collect::<Vec<_>>();
+    }
+
+    fn solve_in<T: Stored>(f: &Factor, x: &mut [f64], y: &mut [f64], threads: &Threads) {
+        let round = |v: &[f64]| v.iter().map(|&v| T::of(v)).collect::<Vec<_>>();
         let (mut xs, mut ys) = (round(x), round(y));
         f.solve(&mut xs, &mut ys, &mut Substitution::default(), threads);
         for (v, s) in x.iter_mut().chain(y.iter_mut()).zip(xs.iter().chain(&ys)) {
-            *v = f64::from(*s);
+            *v = s.get();
         }
     }
 

@@ -105,8 +105,7 @@ pub struct Projective {
     my: Vec<DVec2>,
     /// The residual, all particles, before the gather.
     r: Vec<DVec2>,
-    /// The residual in the factor's row order, then the correction, x and y apart, solved
-    /// together so that each nonzero of the factor is read once for both.
+    /// The global step's right-hand side and the solve's buffers, in the factor's precision.
     global: Global,
     buffers: SpringBuffers,
     /// The fill-reducing order to use; `None` picks the cheaper ([`Self::symbolic`]).
@@ -288,11 +287,7 @@ impl Projective {
         for buf in [&mut self.z, &mut self.my, &mut self.r] {
             buf.resize(n, DVec2::ZERO);
         }
-        self.global = if self.factor.single_precision() {
-            Global::Single(Rhs::new(rows))
-        } else {
-            Global::Double(Rhs::new(rows))
-        };
+        self.global.fit(self.factor.single_precision(), rows);
         self.buffers = SpringBuffers::default();
         self.key = Some(key);
         self.factorizations += 1;
@@ -561,6 +556,19 @@ impl Default for Global {
     }
 }
 
+impl Global {
+    /// Buffers in the precision asked for with `rows` rows: those already held when their
+    /// precision is that one (a tearing cloth refactors at every tear), else new ones.
+    fn fit(&mut self, single: bool, rows: usize) {
+        match (single, &mut *self) {
+            (true, Global::Single(rhs)) => rhs.resize(rows),
+            (false, Global::Double(rhs)) => rhs.resize(rows),
+            (true, _) => *self = Global::Single(Rhs::new(rows)),
+            (false, _) => *self = Global::Double(Rhs::new(rows)),
+        }
+    }
+}
+
 /// The residual in the factor's row order, then the correction, x and y apart, solved together
 /// so that each value of the factor is read once for both; and the solve's buffers.
 struct Rhs<R> {
@@ -571,11 +579,18 @@ struct Rhs<R> {
 
 impl<R: Stored> Rhs<R> {
     fn new(rows: usize) -> Self {
-        Rhs {
-            x: vec![R::default(); rows],
-            y: vec![R::default(); rows],
+        let mut rhs = Rhs {
+            x: vec![],
+            y: vec![],
             work: Substitution::default(),
-        }
+        };
+        rhs.resize(rows);
+        rhs
+    }
+
+    fn resize(&mut self, rows: usize) {
+        self.x.resize(rows, R::default());
+        self.y.resize(rows, R::default());
     }
 }
 

@@ -266,7 +266,8 @@ impl<'a, R: Real> Block<'a, R> {
         }
     }
 
-    /// [`Self::product`] with AVX: four registers of rows, then one, then one row at a time.
+    /// [`Self::product`] with AVX: four registers of rows, then one, then the last rows (fewer
+    /// than a register) in one masked register.
     ///
     /// # Safety
     /// The CPU must support AVX; always inlined, this inherits AVX from its caller.
@@ -279,7 +280,9 @@ impl<'a, R: Real> Block<'a, R> {
         let l = self.values.as_ptr();
         let mut k = 0;
         // SAFETY: the caller guarantees AVX; every load reads column j's rows k .. k + 4 lanes
-        // (or + 1) <= rows, and every store bx, by's k .. k + 4 lanes <= rows (asserted).
+        // (or + 1) <= rows, or the first rows - k of them masked, and every store writes bx,
+        // by's k .. k + 4 lanes (or + 1) <= rows (asserted), or the last register whole only
+        // where k + lanes <= their lengths (checked), else masked to rows.
         unsafe {
             while k + 4 * lanes <= rows {
                 let mut ax = [R::zero(); 4];
@@ -310,7 +313,8 @@ impl<'a, R: Real> Block<'a, R> {
                 R::store(by.as_mut_ptr().add(k), ay);
                 k += lanes;
             }
-            // The last rows, fewer than a register's lanes: the same sums, row by row.
+            // The last rows, fewer than a register's lanes: the same sums, in the first lanes
+            // of a masked register (the others sum zeros).
             let n = rows - k;
             if n > 0 {
                 let (mut ax, mut ay) = (R::zero(), R::zero());
