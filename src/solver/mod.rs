@@ -30,18 +30,19 @@ pub mod state;
 pub mod step;
 pub(crate) mod stiffness;
 pub(crate) mod supernode;
+pub(crate) mod sweep;
 pub(crate) mod team;
 pub(crate) mod wide;
 pub(crate) mod xpbd;
 
 pub use integrators::CgSettings;
-pub use kernels::{Contact, Motion, Sweep};
 pub use method::{Integrator, Iterations};
 pub use parallel::{MAX_THREADS, PARALLEL_MIN_SPRINGS, Threads};
 pub use projective::FactorOrder;
 pub use stability::StabilityEstimate;
 pub use state::{Energy, PackedSpring, State};
 pub use step::{Method, SolveStats, Workspace};
+pub use sweep::{Contact, Motion, Sweep};
 
 /// Each vector's two coordinates as bits, for the tests that ask two ways of computing the same
 /// thing for the same bits.

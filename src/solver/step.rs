@@ -39,11 +39,12 @@
 //! the thread pool ([`Threads`]); none knows who owns the particles.
 
 use super::integrators::{self, CgSettings, Scratch};
-use super::kernels::{self, Motion, Sweep};
+use super::kernels;
 use super::method::{Integrator, Iterations};
 use super::parallel::Threads;
 use super::projective::{self, FactorOrder, Projective};
 use super::state::State;
+use super::sweep::{Motion, Sweep};
 use super::xpbd::{self, Xpbd};
 use glam::DVec2;
 

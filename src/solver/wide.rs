@@ -10,9 +10,9 @@
 
 #![cfg(target_arch = "x86_64")]
 
-use super::kernels::{Contact, SweepArrays};
 use super::spring::{MIN_SPRING_LENGTH, Run, projection_residual, spring_force};
 use super::state::PackedSpring;
+use super::sweep::{Contact, SweepArrays};
 use glam::DVec2;
 use std::arch::x86_64::*;
 
@@ -318,7 +318,7 @@ pub unsafe fn particle_sweep<const MOTION: u8, const DAMP: bool, const GROUND: b
         &drift[tail..],
     );
     let rest_finite =
-        super::kernels::sweep_portable::<MOTION, DAMP, GROUND>(rest, dt, decay, (ground, contact));
+        super::sweep::sweep_portable::<MOTION, DAMP, GROUND>(rest, dt, decay, (ground, contact));
     probe == 0.0 && rest_finite
 }
 
@@ -384,7 +384,7 @@ mod tests {
         if !available() {
             return;
         }
-        use crate::solver::kernels::sweep_portable;
+        use crate::solver::sweep::sweep_portable;
         let n = 41;
         let start = |bad: bool| {
             let x: Vec<DVec2> = (0..n)
