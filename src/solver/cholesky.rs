@@ -935,12 +935,20 @@ mod tests {
     }
 
     fn solve_in<T: Stored>(f: &Factor, x: &mut [f64], y: &mut [f64], threads: &Threads) {
-        let round = |v: &[f64]| v.iter().map(|&v| T::of(v)).collect::<Vec<_>>();
-        let (mut xs, mut ys) = (round(x), round(y));
+        let (mut xs, mut ys) = (rounded::<T>(x), rounded::<T>(y));
         f.solve(&mut xs, &mut ys, &mut Substitution::default(), threads);
-        for (v, s) in x.iter_mut().chain(y.iter_mut()).zip(xs.iter().chain(&ys)) {
-            *v = s.get();
-        }
+        x.copy_from_slice(&widened(&xs));
+        y.copy_from_slice(&widened(&ys));
+    }
+
+    /// `v` rounded to the precision `T`.
+    fn rounded<T: Real>(v: &[f64]) -> Vec<T> {
+        v.iter().map(|&v| T::of(v)).collect()
+    }
+
+    /// `v` in f64 (exact).
+    fn widened<T: Real>(v: &[T]) -> Vec<f64> {
+        v.iter().map(|v| v.get()).collect()
     }
 
     type Solution = (Vec<f64>, Vec<f64>);
@@ -949,8 +957,7 @@ mod tests {
     fn both_builds<T: Stored>(f: &Factor, start: &Solution) -> (Solution, Solution) {
         let solve_with = |forward: &dyn Fn(&mut Span<T>, &mut Below<T>),
                           backward: &dyn Fn(&mut Span<T>, &mut Below<T>)| {
-            let round = |v: &[f64]| v.iter().map(|&v| T::of(v)).collect::<Vec<_>>();
-            let (mut x, mut y) = (round(&start.0), round(&start.1));
+            let (mut x, mut y) = (rounded::<T>(&start.0), rounded::<T>(&start.1));
             let mut all = Span {
                 lo: 0,
                 x: &mut x,
@@ -959,8 +966,7 @@ mod tests {
             let mut below = Below::default();
             forward(&mut all, &mut below);
             backward(&mut all, &mut below);
-            let get = |v: &[T]| v.iter().map(|v| v.get()).collect::<Vec<_>>();
-            (get(&x), get(&y))
+            (widened(&x), widened(&y))
         };
         let all = 0..f.supernodes();
         let portable = solve_with(
