@@ -38,6 +38,7 @@
 //! * [`scene`]: the RON scene format, generators, validation and loading.
 //! * [`runner`]: headless runs of a scene (`hooke run`).
 //! * [`bench`](mod@bench): measured reports (`hooke bench ...`).
+//! * [`readable`]: figures as the panel and the command line print them.
 //! * `ui` (feature `gui`): the desktop app (`ui::AppPlugin`): panel, pointer gestures (grab,
 //!   add, cut, attract), keyboard edits, undo history, zoom and pan.
 //!
@@ -59,6 +60,7 @@
 //! attraction writes it; so can any user system (wind, a field).
 
 pub mod bench;
+pub mod readable;
 pub mod runner;
 pub mod scene;
 pub mod sim;

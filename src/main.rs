@@ -1,6 +1,7 @@
 //! The `hooke` command: the desktop app, and headless runs of scenes.
 
 use clap::{Args, Parser, Subcommand};
+use hooke::readable::number;
 use hooke::runner::{self, Duration, Overrides};
 use hooke::scene::presets;
 use hooke::sim::Integrator;
@@ -260,16 +261,27 @@ fn run(args: RunArgs) -> ExitCode {
         }
     } else {
         println!(
-            "{}: {} particles, {} springs, {} x {} steps of {} s = {:.4} s simulated",
-            r.scene, r.particles, r.springs, r.integrator, r.steps_taken, r.dt, r.sim_time
+            "{}: {} particles, {} springs, {} x {} steps of {} s = {} s simulated",
+            r.scene,
+            r.particles,
+            r.springs,
+            r.integrator,
+            r.steps_taken,
+            // As given (0.016666666666666666 stays whole), unless it is far from any step.
+            if (1e-9..1e3).contains(&r.dt) {
+                r.dt.to_string()
+            } else {
+                format!("{:e}", r.dt)
+            },
+            number(r.sim_time, 4)
         );
         println!(
-            "wall {:.3} s: {:.0} steps/s, {:.2} M spring updates/s; energy {:.6} J -> {:.6} J",
+            "wall {:.3} s: {:.0} steps/s, {:.2} M spring updates/s; energy {} J -> {} J",
             r.wall_s,
             r.steps_per_s,
             r.spring_updates_per_s / 1e6,
-            r.energy_start,
-            r.energy_end
+            number(r.energy_start, 6),
+            number(r.energy_end, 6)
         );
         if r.springs_torn > 0 {
             println!("{} springs tore", r.springs_torn);

@@ -702,3 +702,55 @@ fn every_control_works_under_real_input_and_the_log_stays_quiet() {
         "cloth32's log has errors or warnings of ours:\n{bad}"
     );
 }
+
+/// A scene's parameters outside the panel's slider ranges (all valid: damping of 250 1/s, a dt
+/// of 2e-7 s, 80 Newton steps, a tearing strain of 500 %) stay as the scene set them while the
+/// panel shows them, and no edit is recorded: egui's sliders clamp what they show by default,
+/// which changed the scene's physics in the app, not in `hooke run`, and added an undo entry
+/// nobody made.
+#[test]
+fn the_panel_keeps_a_scenes_values_outside_its_ranges() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let Some((display, _xvfb)) = gui_display(&[]) else {
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("hooke-gui-keep-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("outside.ron");
+    std::fs::write(
+        &scene,
+        "(gravity: (0.0, -9.8), damping: 250.0, ground: Some(0.0), integrator: ImplicitEuler,
+          dt: 2e-7, particles: [(pos: (0.5, 0.9), pinned: true), (pos: (0.6, 0.9))],
+          springs: [(a: 0, b: 1, stiffness: 1e7, rest: 0.1)], tear: Some(5.0),
+          iterations: (newton: 80), start_paused: false)",
+    )
+    .unwrap();
+    let report = dir.join("status.json");
+    let log = dir.join("app.log");
+    let mut app = launch(&display, scene.to_str().unwrap(), &report, &log);
+    let read_log = || std::fs::read_to_string(&log).unwrap_or_default();
+    // Frames drawn, and a report written after them (every 0.5 s): the panel has been shown.
+    let mut first_steps = None;
+    wait_for("the panel's frames", Duration::from_secs(180), || {
+        if let Ok(Some(code)) = app.0.try_wait() {
+            panic!("the app exited early ({code}):\n{}", read_log());
+        }
+        let Some(s) = status(&report) else {
+            return false;
+        };
+        let steps = s["steps"].as_u64().unwrap_or(0);
+        if s["fps"].as_f64().unwrap_or(0.0) == 0.0 || steps == 0 {
+            return false;
+        }
+        *first_steps.get_or_insert(steps) < steps
+    });
+    let s = status(&report).unwrap();
+    assert_eq!(s["damping"], 250.0, "damping: {s}");
+    assert_eq!(s["dt"], 2e-7, "dt: {s}");
+    assert_eq!(s["integrator"], "implicit-euler");
+    assert_eq!(s["iterations"]["newton"], 80, "Newton steps: {s}");
+    assert_eq!(s["tear"], 5.0, "tearing strain: {s}");
+    assert_eq!(s["undo"], 0, "no edit was made: {s}");
+    let bad = bad_lines(&read_log()).join("\n");
+    assert!(bad.is_empty(), "the app's log:\n{bad}");
+}

@@ -94,6 +94,10 @@ pub fn drive(
             "redo": app.history.redo.len(),
             "help": app.help.0,
             "stiffness_override": params.stiffness_override,
+            "damping": params.damping,
+            "dt": params.dt,
+            "integrator": params.integrator.cli_name(),
+            "iterations": params.iterations,
             // In scene order (creation order), for scenes up to REPORT_POSITIONS particles.
             "positions": (solver.particle_count() <= REPORT_POSITIONS)
                 .then(|| solver.x.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>()),

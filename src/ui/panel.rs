@@ -6,10 +6,17 @@ use super::history::{self, History};
 use super::plots::{self, Timeline};
 use super::stats::LiveStats;
 use super::view::CanvasView;
+use crate::readable::number;
 use crate::scene::{CurrentScene, load_into_world, presets};
 use crate::sim::*;
 use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
+
+/// The sliders keep a value outside their range (a scene's damping of 250 1/s, a dt of 1e-7 s,
+/// 80 Newton steps: all valid) until the user moves them; egui's default clamps it as soon as
+/// the slider is drawn, which changed the loaded scene's physics and recorded an edit nobody
+/// made.
+const KEEP: egui::SliderClamping = egui::SliderClamping::Edits;
 use bevy_egui::{EguiContexts, egui};
 
 /// Panel state that is not simulation state.
@@ -91,10 +98,9 @@ pub fn side_panel(
         state.stiffness = (scene.0.scene.spring_defs().next())
             .map(|s| s.stiffness)
             .or(scene.0.scene.click.map(|c| c.stiffness))
-            .unwrap_or(DEFAULT_STIFFNESS)
-            .clamp(10.0, 1e6);
+            .unwrap_or(DEFAULT_STIFFNESS);
         if let Some(strain) = scene.0.scene.tear {
-            state.tear = strain.clamp(0.01, 2.0);
+            state.tear = strain;
         }
     }
     let mut p = params.clone();
@@ -212,6 +218,11 @@ pub fn side_panel(
 
                 ui.label("Stiffness k");
                 let slider = egui::Slider::new(&mut state.stiffness, 10.0..=1e6)
+                    .clamping(KEEP)
+                    .custom_formatter(|v, _| match v < 1e7 {
+                        true => format!("{v:.0}"),
+                        false => format!("{v:.3e}"),
+                    })
                     .logarithmic(true)
                     .suffix(" N/m");
                 if ui.add(slider).changed() {
@@ -231,12 +242,14 @@ pub fn side_panel(
                 ui.end_row();
 
                 ui.label("Damping μ");
-                ui.add(egui::Slider::new(&mut p.damping, 0.0..=100.0).suffix(" 1/s"));
+                let slider = egui::Slider::new(&mut p.damping, 0.0..=100.0).clamping(KEEP);
+                ui.add(slider.suffix(" 1/s"));
                 ui.end_row();
 
                 ui.label("Time step dt");
                 ui.add(
                     egui::Slider::new(&mut p.dt, 1e-6..=1.0 / 30.0)
+                        .clamping(KEEP)
                         .logarithmic(true)
                         .custom_formatter(|v, _| format!("{v:.2e}"))
                         .suffix(" s"),
@@ -267,6 +280,7 @@ pub fn side_panel(
                         p.tear = on.then_some(state.tear);
                     }
                     let slider = egui::Slider::new(&mut state.tear, 0.01..=2.0)
+                        .clamping(KEEP)
                         .logarithmic(true)
                         .custom_formatter(|v, _| format!("{:.0} %", v * 100.0));
                     if ui.add_enabled(on, slider).on_hover_text("strain at which a spring breaks").changed() {
@@ -309,7 +323,7 @@ pub fn side_panel(
                 };
                 row("Particles", solver.particle_count().to_string());
                 row("Springs", solver.spring_count().to_string());
-                row("Simulated time", format!("{:.4} s", clock.time));
+                row("Simulated time", format!("{} s", number(clock.time, 4)));
                 row("Steps", clock.steps.to_string());
                 row("Steps / s", format!("{:.0}", stats.steps_per_second));
                 row(
@@ -317,10 +331,10 @@ pub fn side_panel(
                     format!("{:.2}×", stats.real_time_factor),
                 );
                 row("Frames / s", format!("{:.0}", stats.fps));
-                row("Energy", format!("{:.6} J", energy.total()));
-                row("  kinetic", format!("{:.6} J", energy.kinetic));
-                row("  gravity", format!("{:.6} J", energy.potential_gravity));
-                row("  springs", format!("{:.6} J", energy.potential_springs));
+                row("Energy", format!("{} J", number(energy.total(), 6)));
+                row("  kinetic", format!("{} J", number(energy.kinetic, 6)));
+                row("  gravity", format!("{} J", number(energy.potential_gravity, 6)));
+                row("  springs", format!("{} J", number(energy.potential_springs, 6)));
             });
             ui.separator();
             egui::CollapsingHeader::new("Plots")
@@ -345,7 +359,9 @@ pub fn side_panel(
 fn iteration_rows(ui: &mut egui::Ui, integrator: Integrator, it: &mut Iterations) {
     let row = |ui: &mut egui::Ui, label: &str, value: &mut u32, max: u32, hint: &str| {
         ui.label(label);
-        let slider = egui::Slider::new(value, 1..=max).logarithmic(true);
+        let slider = egui::Slider::new(value, 1..=max)
+            .clamping(KEEP)
+            .logarithmic(true);
         ui.add(slider).on_hover_text(hint);
         ui.end_row();
     };
@@ -424,7 +440,7 @@ fn stability_readout(ui: &mut egui::Ui, s: &StabilityEstimate, integrator: Integ
         ui.label("Stability");
         ui.colored_label(
             color,
-            format!("h·ω_max = {:.3}  (limit {limit})", s.h_omega),
+            format!("h·ω_max = {}  (limit {limit})", number(s.h_omega, 3)),
         );
     });
     let stable_dt = if !s.stable_dt.is_finite() {
@@ -440,8 +456,9 @@ fn stability_readout(ui: &mut egui::Ui, s: &StabilityEstimate, integrator: Integ
         ""
     };
     ui.small(format!(
-        "ω_max ≈ {:.0} rad/s (Gershgorin bound {:.0}); {stable_dt}{note}",
-        s.omega_estimate, s.omega_bound
+        "ω_max ≈ {} rad/s (Gershgorin bound {}); {stable_dt}{note}",
+        number(s.omega_estimate, 0),
+        number(s.omega_bound, 0)
     ));
     if integrator.unconditionally_stable() && s.h_omega > 0.0 {
         ui.small(numerical_damping_note(s.fastest_mode_kept));
