@@ -15,7 +15,7 @@ use bevy::prelude::*;
 /// The sliders keep a value outside their range (a scene's damping of 250 1/s, a dt of 1e-7 s,
 /// 80 Newton steps: all valid) until the user moves them; egui's default clamps it as soon as
 /// the slider is drawn, which changed the loaded scene's physics and recorded an edit nobody
-/// made.
+/// made. (The attraction's fields, which a library user may set too, keep theirs the same way.)
 const KEEP: egui::SliderClamping = egui::SliderClamping::Edits;
 use bevy_egui::{EguiContexts, egui};
 
@@ -294,11 +294,13 @@ pub fn side_panel(
                     ui.add(
                         egui::DragValue::new(&mut attraction.strength)
                             .range(0.0..=5000.0)
+                            .clamp_existing_to_range(false)
                             .suffix(" m/s²"),
                     );
                     ui.add(
                         egui::DragValue::new(&mut attraction.radius)
                             .range(0.01..=1.0)
+                            .clamp_existing_to_range(false)
                             .speed(0.005)
                             .prefix("r ")
                             .suffix(" m"),
