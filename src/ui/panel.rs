@@ -11,13 +11,13 @@ use crate::scene::{CurrentScene, load_into_world, presets};
 use crate::sim::*;
 use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
+use bevy_egui::{EguiContexts, egui};
 
 /// The sliders keep a value outside their range (a scene's damping of 250 1/s, a dt of 1e-7 s,
 /// 80 Newton steps: all valid) until the user moves them; egui's default clamps it as soon as
 /// the slider is drawn, which changed the loaded scene's physics and recorded an edit nobody
 /// made. (The attraction's fields, which a library user may set too, keep theirs the same way.)
 const KEEP: egui::SliderClamping = egui::SliderClamping::Edits;
-use bevy_egui::{EguiContexts, egui};
 
 /// Panel state that is not simulation state.
 #[derive(Resource, Debug, Clone)]
@@ -219,6 +219,7 @@ pub fn side_panel(
                 ui.label("Stiffness k");
                 let slider = egui::Slider::new(&mut state.stiffness, 10.0..=1e6)
                     .clamping(KEEP)
+                    // Up to 7 digits fit the panel's field; a scene's stiffer springs show as 1.000e7.
                     .custom_formatter(|v, _| match v < 1e7 {
                         true => format!("{v:.0}"),
                         false => format!("{v:.3e}"),
