@@ -53,12 +53,12 @@ fn free_end(integrator: Integrator, wind: f64) -> DVec2 {
 }
 
 fn main() {
-    println!("integrator         free end, calm         free end, windy        blown by");
+    println!("integrator           free end, calm         free end, windy        blown by");
     for integrator in Integrator::ALL {
         let calm = free_end(integrator, 0.0);
         let windy = free_end(integrator, 15.0);
         println!(
-            "{:<18} ({:.3}, {:.3})         ({:.3}, {:.3})         {:+.3} m",
+            "{:<20} ({:.3}, {:.3})         ({:.3}, {:.3})         {:+.3} m",
             integrator.cli_name(),
             calm.x,
             calm.y,
