@@ -49,24 +49,78 @@ pub fn measure(clock: Res<SimClock>, mut stats: ResMut<LiveStats>) {
     stats.frames = 0;
 }
 
+/// The share of the app's time the stability estimate may take: one estimate is 60 Lanczos
+/// products with the stiffness, milliseconds on a cloth of 16 k springs but about a second on one
+/// of 4 M, where re-estimating every second (as the small scenes do) took a sixth of the CPU and
+/// held every frame.
+const ESTIMATE_SHARE: f64 = 0.05;
+
+/// When the stability estimate was last made, for which shape, and how long it took.
+#[derive(Debug, Clone, Copy)]
+pub struct LastEstimate {
+    at: Instant,
+    shape: (usize, usize),
+    cost: f64,
+}
+
+impl LastEstimate {
+    /// Whether to estimate again: every second, or less often where an estimate is dear (at
+    /// most [`ESTIMATE_SHARE`] of the time), and sooner after a change of the parameters or the
+    /// scene's shape (at once on small scenes; after four times the estimate's cost on big
+    /// ones, so that dragging a slider over a huge cloth does not estimate every frame).
+    fn due(&self, changed: bool, now: Instant) -> bool {
+        let since = now.duration_since(self.at).as_secs_f64();
+        let periodic = since > (self.cost / ESTIMATE_SHARE).max(1.0);
+        periodic || (changed && since > 4.0 * self.cost)
+    }
+}
+
 /// Re-estimates the stability limit when the parameters or the scene's shape change, and
-/// periodically (the linearisation follows the state): every second, and every second per
-/// 50,000 springs on big scenes, where one estimate (60 Lanczos products) costs milliseconds.
+/// periodically (the linearisation follows the state), within [`ESTIMATE_SHARE`] of the time
+/// on big scenes ([`LastEstimate::due`]).
 pub fn estimate_stability(
     params: Res<SimParams>,
     solver: Res<Solver>,
     mut estimate: ResMut<Stability>,
-    mut last: Local<Option<(Instant, usize, usize)>>,
+    mut last: Local<Option<LastEstimate>>,
 ) {
     let shape = (solver.particle_count(), solver.spring_count());
+    let now = Instant::now();
     let due = match *last {
         None => true,
-        Some((t, n, s)) => {
-            params.is_changed() || (n, s) != shape || t.elapsed().as_secs_f64() > 1.0
-        }
+        Some(l) => l.due(params.is_changed() || l.shape != shape, now),
     };
     if due {
         estimate.set_if_neq(Stability(stability::estimate(&solver, &params)));
-        *last = Some((Instant::now(), shape.0, shape.1));
+        *last = Some(LastEstimate {
+            at: now,
+            shape,
+            cost: now.elapsed().as_secs_f64(),
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Duration;
+
+    #[test]
+    fn a_dear_estimate_is_made_less_often() {
+        let at = Instant::now();
+        let after = |s: f64| at + Duration::from_secs_f64(s);
+        let cheap = LastEstimate {
+            at,
+            shape: (0, 0),
+            cost: 0.002,
+        };
+        assert!(!cheap.due(false, after(0.5)) && cheap.due(false, after(1.01)));
+        assert!(
+            cheap.due(true, after(0.01)),
+            "a change on a small scene: at once"
+        );
+        let dear = LastEstimate { cost: 1.0, ..cheap };
+        assert!(!dear.due(false, after(19.0)) && dear.due(false, after(20.5)));
+        assert!(!dear.due(true, after(3.0)) && dear.due(true, after(4.5)));
     }
 }
