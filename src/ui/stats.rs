@@ -50,7 +50,7 @@ pub fn measure(clock: Res<SimClock>, mut stats: ResMut<LiveStats>) {
 }
 
 /// The share of the app's time the stability estimate may take: one estimate is 60 Lanczos
-/// products with the stiffness, milliseconds on a cloth of 16 k springs but about a second on one
+/// products with the stiffness, milliseconds on a cloth of 16 k springs but over a second on one
 /// of 4 M, where re-estimating every second (as the small scenes do) took a sixth of the CPU and
 /// held every frame.
 const ESTIMATE_SHARE: f64 = 0.05;
