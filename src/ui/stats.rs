@@ -55,12 +55,14 @@ pub fn measure(clock: Res<SimClock>, mut stats: ResMut<LiveStats>) {
 /// held every frame.
 const ESTIMATE_SHARE: f64 = 0.05;
 
-/// When the stability estimate was last made, for which shape, and how long it took.
+/// When the stability estimate was last made, for which shape, how long it took, and whether
+/// the parameters changed since.
 #[derive(Debug, Clone, Copy)]
 pub struct LastEstimate {
     at: Instant,
     shape: (usize, usize),
     cost: f64,
+    changed: bool,
 }
 
 impl LastEstimate {
@@ -68,9 +70,10 @@ impl LastEstimate {
     /// most [`ESTIMATE_SHARE`] of the time), and sooner after a change of the parameters or the
     /// scene's shape (at once on small scenes; after four times the estimate's cost on big
     /// ones, so that dragging a slider over a huge cloth does not estimate every frame).
-    fn due(&self, changed: bool, now: Instant) -> bool {
+    fn due(&self, shape: (usize, usize), now: Instant) -> bool {
         let since = now.duration_since(self.at).as_secs_f64();
         let periodic = since > (self.cost / ESTIMATE_SHARE).max(1.0);
+        let changed = self.changed || self.shape != shape;
         periodic || (changed && since > 4.0 * self.cost)
     }
 }
@@ -86,9 +89,13 @@ pub fn estimate_stability(
 ) {
     let shape = (solver.particle_count(), solver.spring_count());
     let now = Instant::now();
-    let due = match *last {
+    let due = match &mut *last {
         None => true,
-        Some(l) => l.due(params.is_changed() || l.shape != shape, now),
+        Some(l) => {
+            // Remembered until the estimate is made, which on a big scene can be frames later.
+            l.changed |= params.is_changed();
+            l.due(shape, now)
+        }
     };
     if due {
         estimate.set_if_neq(Stability(stability::estimate(&solver, &params)));
@@ -96,6 +103,7 @@ pub fn estimate_stability(
             at: now,
             shape,
             cost: now.elapsed().as_secs_f64(),
+            changed: false,
         });
     }
 }
@@ -113,14 +121,25 @@ mod tests {
             at,
             shape: (0, 0),
             cost: 0.002,
+            changed: false,
         };
-        assert!(!cheap.due(false, after(0.5)) && cheap.due(false, after(1.01)));
+        let same = (0, 0);
+        assert!(!cheap.due(same, after(0.5)) && cheap.due(same, after(1.01)));
+        let changed = LastEstimate {
+            changed: true,
+            ..cheap
+        };
+        assert!(changed.due(same, after(0.01)), "a change on a small scene");
         assert!(
-            cheap.due(true, after(0.01)),
-            "a change on a small scene: at once"
+            cheap.due((1, 0), after(0.01)),
+            "a new shape on a small scene"
         );
         let dear = LastEstimate { cost: 1.0, ..cheap };
-        assert!(!dear.due(false, after(19.0)) && dear.due(false, after(20.5)));
-        assert!(!dear.due(true, after(3.0)) && dear.due(true, after(4.5)));
+        assert!(!dear.due(same, after(19.0)) && dear.due(same, after(20.5)));
+        let dear_changed = LastEstimate {
+            changed: true,
+            ..dear
+        };
+        assert!(!dear_changed.due(same, after(3.0)) && dear_changed.due(same, after(4.5)));
     }
 }
