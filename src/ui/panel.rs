@@ -13,11 +13,17 @@ use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
 use bevy_egui::{EguiContexts, egui};
 
-/// The sliders keep a value outside their range (a scene's damping of 250 1/s, a dt of 1e-7 s,
-/// 80 Newton steps: all valid) until the user moves them; egui's default clamps it as soon as
-/// the slider is drawn, which changed the loaded scene's physics and recorded an edit nobody
-/// made. (The attraction's fields, which a library user may set too, keep theirs the same way.)
-const KEEP: egui::SliderClamping = egui::SliderClamping::Edits;
+/// The panel's slider: it keeps a value outside its range (a scene's damping of 250 1/s, a dt
+/// of 1e-7 s, 80 Newton steps: all valid) until the user moves it. egui's default clamps the
+/// value as soon as the slider is drawn, which changed the loaded scene's physics and recorded
+/// an edit nobody made. (The attraction's fields, which a library user may set too, keep theirs
+/// the same way.)
+fn slider<Num: egui::emath::Numeric>(
+    value: &mut Num,
+    range: std::ops::RangeInclusive<Num>,
+) -> egui::Slider<'_> {
+    egui::Slider::new(value, range).clamping(egui::SliderClamping::Edits)
+}
 
 /// Panel state that is not simulation state.
 #[derive(Resource, Debug, Clone)]
@@ -217,8 +223,7 @@ pub fn side_panel(
                 iteration_rows(ui, p.integrator, &mut p.iterations);
 
                 ui.label("Stiffness k");
-                let slider = egui::Slider::new(&mut state.stiffness, 10.0..=1e6)
-                    .clamping(KEEP)
+                let stiffness = slider(&mut state.stiffness, 10.0..=1e6)
                     // Up to 7 digits fit the panel's field; a scene's stiffer springs show as 1.000e7.
                     .custom_formatter(|v, _| match v < 1e7 {
                         true => format!("{v:.0}"),
@@ -226,7 +231,7 @@ pub fn side_panel(
                     })
                     .logarithmic(true)
                     .suffix(" N/m");
-                if ui.add(slider).changed() {
+                if ui.add(stiffness).changed() {
                     p.stiffness_override = Some(state.stiffness);
                 }
                 ui.end_row();
@@ -243,14 +248,12 @@ pub fn side_panel(
                 ui.end_row();
 
                 ui.label("Damping μ");
-                let slider = egui::Slider::new(&mut p.damping, 0.0..=100.0).clamping(KEEP);
-                ui.add(slider.suffix(" 1/s"));
+                ui.add(slider(&mut p.damping, 0.0..=100.0).suffix(" 1/s"));
                 ui.end_row();
 
                 ui.label("Time step dt");
                 ui.add(
-                    egui::Slider::new(&mut p.dt, 1e-6..=1.0 / 30.0)
-                        .clamping(KEEP)
+                    slider(&mut p.dt, 1e-6..=1.0 / 30.0)
                         .logarithmic(true)
                         .custom_formatter(|v, _| format!("{v:.2e}"))
                         .suffix(" s"),
@@ -280,11 +283,10 @@ pub fn side_panel(
                     if ui.checkbox(&mut on, "").changed() {
                         p.tear = on.then_some(state.tear);
                     }
-                    let slider = egui::Slider::new(&mut state.tear, 0.01..=2.0)
-                        .clamping(KEEP)
+                    let tear = slider(&mut state.tear, 0.01..=2.0)
                         .logarithmic(true)
                         .custom_formatter(|v, _| format!("{:.0} %", v * 100.0));
-                    if ui.add_enabled(on, slider).on_hover_text("strain at which a spring breaks").changed() {
+                    if ui.add_enabled(on, tear).on_hover_text("strain at which a spring breaks").changed() {
                         p.tear = Some(state.tear);
                     }
                 });
@@ -362,10 +364,8 @@ pub fn side_panel(
 fn iteration_rows(ui: &mut egui::Ui, integrator: Integrator, it: &mut Iterations) {
     let row = |ui: &mut egui::Ui, label: &str, value: &mut u32, max: u32, hint: &str| {
         ui.label(label);
-        let slider = egui::Slider::new(value, 1..=max)
-            .clamping(KEEP)
-            .logarithmic(true);
-        ui.add(slider).on_hover_text(hint);
+        ui.add(slider(value, 1..=max).logarithmic(true))
+            .on_hover_text(hint);
         ui.end_row();
     };
     match integrator {
