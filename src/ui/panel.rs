@@ -224,10 +224,11 @@ pub fn side_panel(
 
                 ui.label("Stiffness k");
                 let stiffness = slider(&mut state.stiffness, 10.0..=1e6)
-                    // Up to 7 digits fit the panel's field; a scene's stiffer springs show as 1.000e7.
-                    .custom_formatter(|v, _| match v < 1e7 {
+                    // Up to 6 digits fit the panel's field: the slider's top, 10⁶, and a scene's
+                    // stiffer springs show as 1.00e6, like the time step.
+                    .custom_formatter(|v, _| match v < 999_999.5 {
                         true => format!("{v:.0}"),
-                        false => format!("{v:.3e}"),
+                        false => format!("{v:.2e}"),
                     })
                     .logarithmic(true)
                     .suffix(" N/m");
