@@ -224,12 +224,7 @@ pub fn side_panel(
 
                 ui.label("Stiffness k");
                 let stiffness = slider(&mut state.stiffness, 10.0..=1e6)
-                    // Up to 6 digits fit the panel's field: the slider's top, 10⁶, and a scene's
-                    // stiffer springs show as 1.00e6, like the time step.
-                    .custom_formatter(|v, _| match v < 999_999.5 {
-                        true => format!("{v:.0}"),
-                        false => format!("{v:.2e}"),
-                    })
+                    .custom_formatter(|v, _| stiffness_text(v))
                     .logarithmic(true)
                     .suffix(" N/m");
                 if ui.add(stiffness).changed() {
@@ -420,6 +415,24 @@ const GREEN: egui::Color32 = egui::Color32::from_rgb(140, 200, 140);
 /// The step to offer when a method made for large steps (stable at any dt) runs at a step the
 /// explicit methods could take: picked from the combo box, it keeps the scene's dt (1e-4 s in
 /// the assignment's scenes) and runs a big cloth in slow motion for no gain in stability.
+/// The stiffness field's number. Up to six digits fit the panel beside the slider; the
+/// slider's top, 10⁶ N/m, and a scene's stiffer springs show as 1.00e6, like the time step
+/// (fewer decimals where the exponent is long), and a scene's springs under 10 N/m keep three
+/// decimals (a spring of 0.5 N/m read as 0 N/m).
+fn stiffness_text(k: f64) -> String {
+    match k {
+        0.0 => "0".into(),
+        k if (9.9995e-3..9.9995).contains(&k) => format!("{k:.3}"),
+        k if (9.9995..999_999.5).contains(&k) => format!("{k:.0}"),
+        // As many decimals as fit: 1.00e6, 1.0e-10, 1e-100.
+        k => (0..=2)
+            .rev()
+            .map(|d| format!("{k:.d$e}"))
+            .find(|t| t.len() <= 7)
+            .unwrap_or_else(|| format!("{k:.0e}")),
+    }
+}
+
 fn large_step_suggestion(integrator: Integrator, dt: f64) -> Option<f64> {
     const FRAME: f64 = 1.0 / 60.0;
     (integrator.unconditionally_stable() && dt < FRAME / 4.0).then_some(FRAME)
@@ -514,6 +527,28 @@ fn accuracy_readout(ui: &mut egui::Ui, integrator: Integrator, dt: f64, particle
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Seven characters at most (the width of "999999"; a longer number ran past the panel's
+    /// edge), and within 5 % of the value from 10⁻⁹⁹ to 10³⁰⁰ N/m (below, the decade).
+    #[test]
+    fn the_stiffness_field_fits_the_panel() {
+        assert_eq!(stiffness_text(0.0), "0");
+        for e in -990..=3000 {
+            let k = 10f64.powf(e as f64 / 10.0);
+            let text = stiffness_text(k);
+            assert!(text.len() <= 7, "{k}: {text}");
+            let back: f64 = text.parse().unwrap();
+            assert!((back - k).abs() <= 0.05 * k, "{k}: {text}");
+        }
+        assert_eq!(stiffness_text(0.5), "0.500");
+        assert_eq!(stiffness_text(10.0), "10");
+        assert_eq!(stiffness_text(999_999.0), "999999");
+        assert_eq!(stiffness_text(1e6), "1.00e6");
+        assert_eq!(stiffness_text(9.99e99), "9.99e99");
+        assert_eq!(stiffness_text(1e300), "1.0e300");
+        assert_eq!(stiffness_text(1e-10), "1.0e-10");
+        assert_eq!(stiffness_text(2e-300), "2e-300");
+    }
 
     /// Offered to the large-step methods at small steps only, never to the explicit ones.
     #[test]
