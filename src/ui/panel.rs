@@ -224,7 +224,7 @@ pub fn side_panel(
 
                 ui.label("Stiffness k");
                 let stiffness = slider(&mut state.stiffness, 10.0..=1e6)
-                    .custom_formatter(|v, _| stiffness_text(v))
+                    .custom_formatter(|v, _| field_number(v))
                     .logarithmic(true)
                     .suffix(" N/m");
                 if ui.add(stiffness).changed() {
@@ -244,7 +244,15 @@ pub fn side_panel(
                 ui.end_row();
 
                 ui.label("Damping μ");
-                ui.add(slider(&mut p.damping, 0.0..=100.0).suffix(" 1/s"));
+                ui.add(
+                    slider(&mut p.damping, 0.0..=100.0)
+                        .custom_formatter(|v, decimals| {
+                            // egui's own figure, unless a scene's damping is too long for it.
+                            let text = egui::emath::format_with_decimals_in_range(v, decimals);
+                            if text.len() <= 7 { text } else { field_number(v) }
+                        })
+                        .suffix(" 1/s"),
+                );
                 ui.end_row();
 
                 ui.label("Time step dt");
@@ -279,9 +287,12 @@ pub fn side_panel(
                     if ui.checkbox(&mut on, "").changed() {
                         p.tear = on.then_some(state.tear);
                     }
+                    // Shown and typed in percent: typing 30 sets a strain of 0.3.
                     let tear = slider(&mut state.tear, 0.01..=2.0)
                         .logarithmic(true)
-                        .custom_formatter(|v, _| format!("{:.0} %", v * 100.0));
+                        .custom_formatter(|v, _| field_number((v * 100.0).round()))
+                        .custom_parser(|text| parse_number(text).map(|percent| percent / 100.0))
+                        .suffix(" %");
                     if ui.add_enabled(on, tear).on_hover_text("strain at which a spring breaks").changed() {
                         p.tear = Some(state.tear);
                     }
@@ -415,11 +426,11 @@ const GREEN: egui::Color32 = egui::Color32::from_rgb(140, 200, 140);
 /// The step to offer when a method made for large steps (stable at any dt) runs at a step the
 /// explicit methods could take: picked from the combo box, it keeps the scene's dt (1e-4 s in
 /// the assignment's scenes) and runs a big cloth in slow motion for no gain in stability.
-/// The stiffness field's number. Up to six digits fit the panel beside the slider; the
-/// slider's top, 10⁶ N/m, and a scene's stiffer springs show as 1.00e6, like the time step
-/// (fewer decimals where the exponent is long), and a scene's springs under 10 N/m keep three
-/// decimals (a spring of 0.5 N/m read as 0 N/m).
-fn stiffness_text(k: f64) -> String {
+/// A slider field's number in at most seven characters: up to six digits fit the panel beside
+/// a slider. The stiffness slider's top, 10⁶ N/m, and a scene's stiffer springs show as 1.00e6,
+/// like the time step (fewer decimals where the exponent is long), and a scene's springs under
+/// 10 N/m keep three decimals (a spring of 0.5 N/m read as 0 N/m).
+fn field_number(k: f64) -> String {
     match k {
         0.0 => "0".into(),
         k if (9.9995e-3..9.9995).contains(&k) => format!("{k:.3}"),
@@ -431,6 +442,17 @@ fn stiffness_text(k: f64) -> String {
             .find(|t| t.len() <= 7)
             .unwrap_or_else(|| format!("{k:.0e}")),
     }
+}
+
+/// A number typed into a field, as egui reads one: spaces anywhere, and the minus sign (−)
+/// for a hyphen. A trailing % or unit is not part of it.
+fn parse_number(text: &str) -> Option<f64> {
+    let text: String = text
+        .chars()
+        .filter(|c| !c.is_whitespace())
+        .map(|c| if c == '−' { '-' } else { c })
+        .collect();
+    text.trim_end_matches('%').parse().ok()
 }
 
 fn large_step_suggestion(integrator: Integrator, dt: f64) -> Option<f64> {
@@ -531,23 +553,34 @@ mod tests {
     /// Seven characters at most (the width of "999999"; a longer number ran past the panel's
     /// edge), and within 5 % of the value from 10⁻⁹⁹ to 10³⁰⁰ N/m (below, the decade).
     #[test]
-    fn the_stiffness_field_fits_the_panel() {
-        assert_eq!(stiffness_text(0.0), "0");
+    fn a_fields_number_fits_the_panel() {
+        assert_eq!(field_number(0.0), "0");
         for e in -990..=3000 {
             let k = 10f64.powf(e as f64 / 10.0);
-            let text = stiffness_text(k);
+            let text = field_number(k);
             assert!(text.len() <= 7, "{k}: {text}");
             let back: f64 = text.parse().unwrap();
             assert!((back - k).abs() <= 0.05 * k, "{k}: {text}");
         }
-        assert_eq!(stiffness_text(0.5), "0.500");
-        assert_eq!(stiffness_text(10.0), "10");
-        assert_eq!(stiffness_text(999_999.0), "999999");
-        assert_eq!(stiffness_text(1e6), "1.00e6");
-        assert_eq!(stiffness_text(9.99e99), "9.99e99");
-        assert_eq!(stiffness_text(1e300), "1.0e300");
-        assert_eq!(stiffness_text(1e-10), "1.0e-10");
-        assert_eq!(stiffness_text(2e-300), "2e-300");
+        assert_eq!(field_number(0.5), "0.500");
+        assert_eq!(field_number(10.0), "10");
+        assert_eq!(field_number(999_999.0), "999999");
+        assert_eq!(field_number(1e6), "1.00e6");
+        assert_eq!(field_number(9.99e99), "9.99e99");
+        assert_eq!(field_number(1e300), "1.0e300");
+        assert_eq!(field_number(1e-10), "1.0e-10");
+        assert_eq!(field_number(2e-300), "2e-300");
+    }
+
+    /// What the tearing field's parser reads (the field divides it by 100).
+    #[test]
+    fn a_typed_number_is_read() {
+        assert_eq!(parse_number("30"), Some(30.0));
+        assert_eq!(parse_number(" 1 5 %"), Some(15.0));
+        assert_eq!(parse_number("−2.5e1"), Some(-25.0));
+        assert_eq!(parse_number("60 %"), Some(60.0));
+        assert_eq!(parse_number("a30"), None);
+        assert_eq!(parse_number(""), None);
     }
 
     /// Offered to the large-step methods at small steps only, never to the explicit ones.
