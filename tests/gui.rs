@@ -138,12 +138,23 @@ fn pixel(png: &Path, x: i64, y: i64) -> (u8, u8, u8) {
     (v[0], v[1], v[2])
 }
 
-/// Starts the app on `scene` with a status file, on software Vulkan.
+/// Starts the app on `scene` with a status file, on software Vulkan, in the project's folder.
 fn launch(display: &str, scene: &str, report: &Path, log: &Path) -> Killed {
+    launch_in(
+        display,
+        scene,
+        report,
+        log,
+        Path::new(env!("CARGO_MANIFEST_DIR")),
+    )
+}
+
+/// [`launch`] in the folder `cwd` (where Save writes `saved/`).
+fn launch_in(display: &str, scene: &str, report: &Path, log: &Path, cwd: &Path) -> Killed {
     let app = Command::new(env!("CARGO_BIN_EXE_hooke"))
         .args(["--scene", scene, "--exit-after", "300", "--report"])
         .arg(report)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .current_dir(cwd)
         .env("DISPLAY", display)
         .env("WGPU_BACKEND", "vulkan")
         .env_remove("WAYLAND_DISPLAY")
@@ -336,9 +347,16 @@ struct Session {
 
 impl Session {
     fn start(display: &str, scene: &str, dir: &Path) -> Session {
+        Session::start_in(display, scene, dir, Path::new(env!("CARGO_MANIFEST_DIR")))
+    }
+
+    /// [`Session::start`] with the app working in `cwd`.
+    fn start_in(display: &str, scene: &str, dir: &Path, cwd: &Path) -> Session {
         let report = dir.join(format!("{scene}-session.json"));
         let log = dir.join(format!("{scene}-session.log"));
-        let mut app = launch(display, scene, &report, &log);
+        // A report left by an earlier session in `dir` is not this app's.
+        let _ = std::fs::remove_file(&report);
+        let mut app = launch_in(display, scene, &report, &log, cwd);
         wait_for("the app's first frames", Duration::from_secs(180), || {
             if let Ok(Some(code)) = app.0.try_wait() {
                 panic!("the app exited early ({code})");
@@ -769,4 +787,115 @@ fn the_panel_keeps_a_scenes_values_outside_its_ranges() {
     assert_eq!(s["undo"], 0, "no edit was made: {s}");
     let bad = bad_lines(&read_log()).join("\n");
     assert!(bad.is_empty(), "the app's log:\n{bad}");
+}
+
+/// Sends `window` a close request as a window manager does (a `WM_DELETE_WINDOW` client
+/// message), through libX11 from Python's ctypes: this xdotool's `windowclose` destroys the
+/// window instead of asking it to close.
+fn request_close(display: &str, window: &str) {
+    const SCRIPT: &str = r#"
+import ctypes, sys
+x = ctypes.cdll.LoadLibrary("libX11.so.6")
+x.XOpenDisplay.restype = ctypes.c_void_p
+x.XOpenDisplay.argtypes = [ctypes.c_char_p]
+x.XInternAtom.restype = ctypes.c_ulong
+x.XInternAtom.argtypes = [ctypes.c_void_p, ctypes.c_char_p, ctypes.c_int]
+x.XSendEvent.argtypes = [ctypes.c_void_p, ctypes.c_ulong, ctypes.c_int, ctypes.c_long, ctypes.c_void_p]
+x.XFlush.argtypes = [ctypes.c_void_p]
+class ClientMessage(ctypes.Structure):
+    _fields_ = [("type", ctypes.c_int), ("serial", ctypes.c_ulong), ("send_event", ctypes.c_int),
+                ("display", ctypes.c_void_p), ("window", ctypes.c_ulong),
+                ("message_type", ctypes.c_ulong), ("format", ctypes.c_int),
+                ("data", ctypes.c_long * 5)]
+class Event(ctypes.Union):
+    _fields_ = [("xclient", ClientMessage), ("pad", ctypes.c_long * 24)]
+d = x.XOpenDisplay(None)
+if not d:
+    sys.exit("cannot open the display")
+window = int(sys.argv[1])
+e = Event()
+e.xclient.type = 33  # ClientMessage
+e.xclient.window = window
+e.xclient.message_type = x.XInternAtom(d, b"WM_PROTOCOLS", 0)
+e.xclient.format = 32
+e.xclient.data[0] = x.XInternAtom(d, b"WM_DELETE_WINDOW", 0)
+x.XSendEvent(d, window, 0, 0, ctypes.byref(e))
+x.XFlush(d)
+"#;
+    let out = Command::new("python3")
+        .args(["-c", SCRIPT, window])
+        .env("DISPLAY", display)
+        .output()
+        .expect("python3 runs");
+    assert!(
+        out.status.success(),
+        "the close request was not sent: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// Waits for the app to exit by itself, and returns whether it exited cleanly.
+fn exits(app: &mut Killed, what: &str) -> bool {
+    let mut code = None;
+    wait_for(what, Duration::from_secs(30), || {
+        code = app.0.try_wait().ok().flatten();
+        code.is_some()
+    });
+    code.is_some_and(|c| c.success())
+}
+
+/// Closing the window with nothing unsaved quits at once; with an edit it asks, the keys
+/// wait, Escape goes back, and "Save and quit" writes the scene under `saved/` and quits. A
+/// structure built click by click was lost to the close button.
+#[test]
+fn closing_with_unsaved_edits_asks_first() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let Some((display, _xvfb)) = gui_display(&["xdotool", "python3"]) else {
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("hooke-gui-quit-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+
+    // Nothing unsaved: the close request quits.
+    let mut s = Session::start_in(&display, "empty", &dir, &dir);
+    assert_eq!(s.status()["unsaved"], false);
+    request_close(&display, &s.window);
+    assert!(exits(&mut s.app, "the app to quit"), "{}", s.log());
+
+    // One particle added: the close request asks first.
+    let mut s = Session::start_in(&display, "empty", &dir, &dir);
+    s.move_to(0.5, 0.8);
+    s.x(&["click", "1"]);
+    s.expect("a particle, unsaved", |st| {
+        st["particles"] == 1 && st["unsaved"] == true
+    });
+    request_close(&display, &s.window);
+    s.expect("the prompt", |st| st["quit_prompt"] == true);
+    // The canvas's keys wait while it is up: C does not clear.
+    s.key("c");
+    std::thread::sleep(Duration::from_millis(500));
+    let st = s.expect("a report after the key", |_| true);
+    assert_eq!(st["particles"], 1, "C cleared behind the prompt: {st}");
+    assert!(s.app.0.try_wait().unwrap().is_none(), "the app quit");
+    s.key("Escape");
+    s.expect("back from the prompt", |st| st["quit_prompt"] == false);
+
+    // Save and quit: its button, where the modal sits (centred in the window).
+    request_close(&display, &s.window);
+    let st = s.expect("the prompt again", |st| st["quit_prompt"] == true);
+    let view = &st["view"];
+    let (center, panel) = (&view["center"], view["panel_width"].as_f64().unwrap());
+    let width = panel + 2.0 * (center[0].as_f64().unwrap() - panel);
+    let height = 2.0 * center[1].as_f64().unwrap();
+    s.move_px((width / 2.0) as i64 - 148, (height / 2.0) as i64 + 32);
+    s.x(&["click", "1"]);
+    assert!(exits(&mut s.app, "the app to save and quit"), "{}", s.log());
+    let saved = dir.join("saved/empty-1.ron");
+    let scene =
+        hooke::scene::LoadedScene::read(&saved).unwrap_or_else(|e| panic!("the saved scene: {e}"));
+    assert_eq!(scene.expanded().particles.len(), 1);
+    let bad = bad_lines(&s.log()).join("\n");
+    assert!(bad.is_empty(), "the app's log:\n{bad}");
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -3,6 +3,7 @@
 
 use super::controls::HelpOverlay;
 use super::history::History;
+use super::quit::QuitPrompt;
 use super::stats::LiveStats;
 use super::view::CanvasView;
 use crate::sim::{Attraction, Particle, Pinned, SimClock, SimParams, Solver, Tearing};
@@ -37,6 +38,7 @@ pub struct DriveState {
 pub struct AppState<'w, 's> {
     history: Res<'w, History>,
     help: Res<'w, HelpOverlay>,
+    quit: Res<'w, QuitPrompt>,
     tearing: Res<'w, Tearing>,
     attraction: Res<'w, Attraction>,
     pinned: Query<'w, 's, (), (With<Particle>, With<Pinned>)>,
@@ -92,6 +94,8 @@ pub fn drive(
             "external_force": solver.external_active,
             "undo": app.history.undo.len(),
             "redo": app.history.redo.len(),
+            "unsaved": app.history.unsaved(),
+            "quit_prompt": app.quit.0,
             "help": app.help.0,
             "stiffness_override": params.stiffness_override,
             "damping": params.damping,

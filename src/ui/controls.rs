@@ -28,6 +28,7 @@ pub const CONTROLS: &[(&str, &str)] = &[
     ("N", "one step while paused"),
     ("R", "reset the scene"),
     ("S", "save to saved/"),
+    ("close the window", "quit; asks first if edits are unsaved"),
     ("H or ?", "show or hide this list"),
 ];
 

@@ -34,6 +34,8 @@ pub struct Entry {
     /// What the edit was ("add", "cut", "stiffness", ...).
     pub label: &'static str,
     pub state: State,
+    /// Which version of the scene `state` is (see [`History::unsaved`]).
+    version: u64,
 }
 
 #[derive(Resource, Debug, Default)]
@@ -42,9 +44,28 @@ pub struct History {
     pub redo: Vec<Entry>,
     /// The label and time of the last recorded edit, for coalescing.
     last: Option<(&'static str, Instant)>,
+    /// The version on screen: each edit makes a new one, and undo and redo bring back the
+    /// version they restore, so undoing back to what was saved leaves nothing unsaved.
+    version: u64,
+    /// The newest version made.
+    newest: u64,
+    /// The version last saved or loaded from a file.
+    saved: u64,
 }
 
 impl History {
+    /// Is what is on screen other than what was last saved or loaded: has the user made
+    /// something that closing the app would lose? (Running the simulation is no edit.)
+    pub fn unsaved(&self) -> bool {
+        self.version != self.saved
+    }
+
+    /// What is on screen is now in a file (saved, or just loaded).
+    pub fn mark_saved(&mut self) {
+        self.saved = self.version;
+        self.last = None;
+    }
+
     /// The springs of the newest entry, to share when they have not changed.
     fn shared_springs(&self, springs: Vec<SpringDef>) -> Arc<Vec<SpringDef>> {
         let newest = self.undo.back().or(self.redo.last());
@@ -83,6 +104,7 @@ pub fn record_burst(world: &mut World, label: &'static str, params: Option<SimPa
 
 fn push(world: &mut World, label: &'static str, params: Option<SimParams>, burst: bool) {
     let now = Instant::now();
+    // (A save ends a burst: `mark_saved` clears `last`.)
     let coalesce = burst
         && world
             .resource::<History>()
@@ -94,7 +116,14 @@ fn push(world: &mut World, label: &'static str, params: Option<SimParams>, burst
     }
     let state = capture(world, params);
     let mut history = world.resource_mut::<History>();
-    history.undo.push_back(Entry { label, state });
+    let version = history.version;
+    history.undo.push_back(Entry {
+        label,
+        state,
+        version,
+    });
+    history.newest += 1;
+    history.version = history.newest;
     while history.undo.len() > DEPTH {
         history.undo.pop_front();
     }
@@ -149,13 +178,16 @@ fn travel(
     let now = capture(world, None);
     restore(world, &entry.state);
     let mut history = world.resource_mut::<History>();
+    let version = history.version;
     put(
         &mut history,
         Entry {
             label: entry.label,
             state: now,
+            version,
         },
     );
+    history.version = entry.version;
     history.last = None;
     Some(entry.label)
 }
@@ -212,6 +244,35 @@ mod tests {
         assert_eq!(undo(world), None, "one edit, one undo");
         let particles = world.query::<&Particle>().iter(world).count();
         assert_eq!(particles, before.0.len());
+    }
+
+    /// Nothing is unsaved until an edit; saving marks what is on screen saved; undoing past the
+    /// save, or an edit after it (a burst's next step included), makes it unsaved again, and
+    /// redoing back to it saved.
+    #[test]
+    fn unsaved_follows_the_edits_since_the_save() {
+        let mut app = crate::headless_app();
+        app.init_resource::<History>();
+        let world = app.world_mut();
+        let unsaved = |w: &World| w.resource::<History>().unsaved();
+        assert!(!unsaved(world));
+        record(world, "add");
+        assert!(unsaved(world));
+        world.resource_mut::<History>().mark_saved();
+        assert!(!unsaved(world));
+        undo(world);
+        assert!(unsaved(world), "undone past the save");
+        redo(world);
+        assert!(!unsaved(world), "redone back to it");
+        record_burst(world, "stiffness", None);
+        world.resource_mut::<History>().mark_saved();
+        record_burst(world, "stiffness", None);
+        assert!(unsaved(world), "a burst goes on after a save");
+        undo(world);
+        assert!(!unsaved(world), "back at the saved state");
+        undo(world);
+        undo(world);
+        assert!(unsaved(world));
     }
 
     /// A slider drag is one entry, a different edit another, each click one; a new edit drops

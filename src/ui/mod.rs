@@ -13,6 +13,7 @@ mod pick;
 mod plots;
 mod pointer;
 mod predict;
+mod quit;
 mod stats;
 mod view;
 
@@ -50,6 +51,7 @@ impl Plugin for AppPlugin {
             .init_resource::<events::PressedAt>()
             .init_resource::<events::KeyPresses>()
             .init_resource::<controls::HelpOverlay>()
+            .init_resource::<quit::QuitPrompt>()
             .init_resource::<plots::Timeline>()
             .init_resource::<crate::sim::watch::EnergyWatch>()
             .init_resource::<crate::sim::Stability>()
@@ -62,7 +64,7 @@ impl Plugin for AppPlugin {
             })
             .add_systems(
                 EguiPrimaryContextPass,
-                (panel::side_panel, controls::help_overlay).chain(),
+                (panel::side_panel, controls::help_overlay, quit::quit_prompt).chain(),
             )
             // The state before a tear, for undo: after the springs are found, before they go.
             .add_systems(
@@ -79,8 +81,9 @@ impl Plugin for AppPlugin {
                         events::track_presses,
                         view::zoom_and_pan,
                         view::fit_camera,
-                        input::keyboard,
-                        input::particle_keys,
+                        // While the quit prompt is up, keys are the prompt's (Escape).
+                        input::keyboard.run_if(quit::no_prompt),
+                        input::particle_keys.run_if(quit::no_prompt),
                         pointer::press,
                         pointer::drag,
                         pointer::attract,
@@ -91,6 +94,7 @@ impl Plugin for AppPlugin {
                     stats::estimate_stability,
                     plots::sample.after(stats::estimate_stability),
                     automation::drive,
+                    quit::close_requested,
                     draw::update_batches.after(pointer::drag),
                     draw::draw_frame.after(pointer::attract),
                 ),
@@ -109,6 +113,8 @@ pub fn run_app(scene: LoadedScene, options: AppOptions) {
                 resolution: WindowResolution::new(1280, 800),
                 ..default()
             }),
+            // A close request asks first when there are unsaved edits (`quit`).
+            close_when_requested: false,
             ..default()
         }))
         .add_plugins(EguiPlugin::default())

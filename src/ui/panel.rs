@@ -7,7 +7,7 @@ use super::plots::{self, Timeline};
 use super::stats::LiveStats;
 use super::view::CanvasView;
 use crate::readable::number;
-use crate::scene::{CurrentScene, load_into_world, presets};
+use crate::scene::{CurrentScene, presets};
 use crate::sim::*;
 use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
@@ -131,10 +131,8 @@ pub fn side_panel(
                         for (label, target) in &scene_list.0 {
                             if ui.selectable_label(*label == scene_name, label).clicked() {
                                 match presets::resolve(target) {
-                                    Ok(loaded) => commands.queue(move |w: &mut World| {
-                                        history::record(w, "load");
-                                        load_into_world(w, &loaded)
-                                    }),
+                                    Ok(loaded) => commands
+                                        .queue(move |w: &mut World| actions::open(w, &loaded)),
                                     Err(e) => commands
                                         .insert_resource(Notice(Some((e.to_string(), true)))),
                                 }
