@@ -860,6 +860,7 @@ fn closing_with_unsaved_edits_asks_first() {
     // Nothing unsaved: the close request quits.
     let mut s = Session::start_in(&display, "empty", &dir, &dir);
     assert_eq!(s.status()["unsaved"], false);
+    assert_eq!(s.x(&["getwindowname", &s.window]), "hooke: empty");
     request_close(&display, &s.window);
     assert!(exits(&mut s.app, "the app to quit"), "{}", s.log());
 
@@ -869,6 +870,10 @@ fn closing_with_unsaved_edits_asks_first() {
     s.x(&["click", "1"]);
     s.expect("a particle, unsaved", |st| {
         st["particles"] == 1 && st["unsaved"] == true
+    });
+    // The title marks it, as editors do.
+    wait_for("the title's mark", Duration::from_secs(10), || {
+        s.x(&["getwindowname", &s.window]) == "hooke: empty *"
     });
     request_close(&display, &s.window);
     s.expect("the prompt", |st| st["quit_prompt"] == true);

@@ -15,6 +15,7 @@ mod pointer;
 mod predict;
 mod quit;
 mod stats;
+mod title;
 mod view;
 
 use crate::scene::{LoadedScene, load_into_world};
@@ -95,6 +96,7 @@ impl Plugin for AppPlugin {
                     plots::sample.after(stats::estimate_stability),
                     automation::drive,
                     quit::close_requested,
+                    title::window_title,
                     draw::update_batches.after(pointer::drag),
                     draw::draw_frame.after(pointer::attract),
                 ),
@@ -104,7 +106,7 @@ impl Plugin for AppPlugin {
 
 /// Opens the window and runs the app until it is closed.
 pub fn run_app(scene: LoadedScene, options: AppOptions) {
-    let title = format!("hooke: {}", scene.name());
+    let title = title::title(&scene.name(), false);
     App::new()
         .add_plugins(DefaultPlugins.set(WindowPlugin {
             primary_window: Some(Window {
