@@ -236,6 +236,12 @@ fn app_starts_draws_and_accepts_clicks() {
     let s = status(&report).unwrap();
     assert_eq!(s["particles"], 0, "the empty scene starts empty");
     assert_eq!(s["paused"], true, "the assignment's scene starts paused");
+    // Paused and untouched, it waits for input instead of drawing the same picture sixty
+    // times a second (it did, and kept most of two cores busy): a few frames a second, for
+    // the report's clock. The clicks below are input, and wake it at once.
+    wait_for("a paused app to idle", Duration::from_secs(30), || {
+        status(&report).is_some_and(|s| s["fps"].as_f64().is_some_and(|f| f < 8.0))
+    });
 
     // Three clicks on the canvas, within 0.15 of each other: 3 particles, 3 springs, the
     // first pinned. A click on the panel adds nothing.

@@ -8,6 +8,7 @@ mod edit;
 mod events;
 mod history;
 mod input;
+mod pace;
 mod panel;
 mod pick;
 mod plots;
@@ -23,7 +24,7 @@ use crate::sim::{SimParams, SimPlugin, tear};
 use bevy::prelude::*;
 use bevy::render::renderer::RenderAdapterInfo;
 use bevy::window::WindowResolution;
-use bevy_egui::{EguiPlugin, EguiPrimaryContextPass};
+use bevy_egui::{EguiPlugin, EguiPreUpdateSet, EguiPrimaryContextPass};
 use std::path::PathBuf;
 
 pub use automation::AppOptions;
@@ -64,6 +65,12 @@ impl Plugin for AppPlugin {
                 }
             })
             .add_systems(
+                PreUpdate,
+                pace::drop_unchanged_modifiers
+                    .after(EguiPreUpdateSet::ProcessInput)
+                    .before(EguiPreUpdateSet::BeginPass),
+            )
+            .add_systems(
                 EguiPrimaryContextPass,
                 (panel::side_panel, controls::help_overlay, quit::quit_prompt).chain(),
             )
@@ -97,6 +104,7 @@ impl Plugin for AppPlugin {
                     automation::drive,
                     quit::close_requested,
                     title::window_title,
+                    pace::pace_frames,
                     draw::update_batches.after(pointer::drag),
                     draw::draw_frame.after(pointer::attract),
                 ),
