@@ -36,7 +36,9 @@ pub fn bandwidth(bytes: usize, threads: usize) -> Result<f64, String> {
         .build()
         .map_err(|e| format!("cannot start {threads} threads: {e}"))?;
     let n = (bytes / 8).max(1024);
-    let mut a: Vec<f64> = (0..n).map(|i| i as f64).collect();
+    // On huge pages where the system has them, as the step's own arrays are.
+    let mut a: Vec<f64> = crate::solver::pages::with_capacity(n);
+    a.extend((0..n).map(|i| i as f64));
     let chunk = n.div_ceil(threads);
     // Several sweeps per timing on small arrays, so that starting the threads does not count.
     let sweeps = (4_000_000 / (8 * n)).max(1);

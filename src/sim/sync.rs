@@ -11,7 +11,7 @@
 use super::components::*;
 use super::params::SimParams;
 use super::solver::Solver;
-use crate::solver::{PackedSpring, State};
+use crate::solver::{PackedSpring, State, pages};
 use bevy::ecs::system::SystemParam;
 use bevy::math::DVec2;
 use bevy::prelude::*;
@@ -174,11 +174,12 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &Springs) {
         rank[j as usize] = i as u32;
     }
     drop(order);
+    // The step's arrays on huge pages where the system has them (`pages`).
     let (mut x, mut v, mut mass, mut inv_mass) = (
-        vec![DVec2::ZERO; n],
-        vec![DVec2::ZERO; n],
-        vec![1.0; n],
-        vec![1.0; n],
+        pages::filled(DVec2::ZERO, n),
+        pages::filled(DVec2::ZERO, n),
+        pages::filled(1.0, n),
+        pages::filled(1.0, n),
     );
     let mut entities = vec![Entity::PLACEHOLDER; n];
     let (mut kinematic, mut external_active) = (0, false);
@@ -199,7 +200,7 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &Springs) {
     // The external forces are stored only while one is set (a second pass, then).
     let mut external = vec![];
     if external_active {
-        external = vec![DVec2::ZERO; n];
+        external = pages::filled(DVec2::ZERO, n);
         for (_, _, _, _, _, ext, _, _, index) in particles.iter() {
             external[index.0 as usize] = ext.0;
         }
@@ -219,7 +220,7 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &Springs) {
     };
     // Sized once: the query knows its length.
     let m = springs.iter().size_hint().1.unwrap_or(0);
-    let (mut packed, mut spring_entity_indices) = (Vec::with_capacity(m), Vec::with_capacity(m));
+    let (mut packed, mut spring_entity_indices) = (pages::with_capacity(m), Vec::with_capacity(m));
     for (e, s) in springs {
         if let (Some(a), Some(b)) = (end(s.a), end(s.b)) {
             packed.push(PackedSpring {
@@ -237,7 +238,7 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &Springs) {
     sort_springs(&mut packed, &mut spring_entity_indices);
 
     let state = State {
-        f: vec![DVec2::ZERO; n],
+        f: pages::filled(DVec2::ZERO, n),
         external_active,
         external,
         kinematic,

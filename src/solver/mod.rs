@@ -22,6 +22,7 @@ pub(crate) mod integrators;
 pub(crate) mod kernels;
 pub mod method;
 pub(crate) mod ordering;
+pub(crate) mod pages;
 pub(crate) mod parallel;
 pub(crate) mod projective;
 pub(crate) mod spring;
