@@ -7,6 +7,7 @@
 //! The operations are the scalar kernel's, in the same order ([`super::spring::spring_force`]:
 //! d = x_a − x_b, l = √(d·d), d · (−k (l − L) / l)), and IEEE square root and division are
 //! correctly rounded, so the forces are bit for bit the scalar ones. The gather of positions and the scatter of forces stay scalar.
+//! On big scenes the pass prefetches what it will read a few hundred springs on.
 
 #![cfg(target_arch = "x86_64")]
 
@@ -38,7 +39,11 @@ pub unsafe fn for_each_spring_force(
     // at 256², one thread).
     let mut octs = springs.chunks_exact(8);
     let (mut f0, mut f1) = ([0.0f64; 8], [0.0f64; 8]);
-    for oct in &mut octs {
+    let prefetch = x.len() >= PREFETCH_FROM_PARTICLES;
+    for (o, oct) in (&mut octs).enumerate() {
+        if prefetch {
+            prefetch_ahead(x, springs, 8 * o);
+        }
         let (q0, q1) = oct.split_at(4);
         // SAFETY: this function's caller guarantees AVX.
         let short = unsafe { four_forces(x, q0, &mut f0) | (four_forces(x, q1, &mut f1) << 4) };
@@ -52,6 +57,35 @@ pub unsafe fn for_each_spring_force(
         run.push((s.a, s.b), spring_force(s, x), &mut add);
     }
     run.finish(add);
+}
+
+/// From this many particles (4 MB of positions) the force pass asks for its data ahead of
+/// use. Measured on an Intel Xeon (window S, the README): on the 707² cloth (2 M springs) the
+/// pass ran 35–43 % faster with it, on 1000² and 2000² 8–15 %; on 500² it gained 2–8 % and on
+/// the cached 256² and 350² cloths it lost up to 7 %.
+const PREFETCH_FROM_PARTICLES: usize = 1 << 18;
+
+/// How far ahead, in springs, the far ends' positions are asked for; the spring records
+/// themselves twice as far.
+const PREFETCH_AHEAD: usize = 256;
+
+/// Asks for the cache lines the pass will need [`PREFETCH_AHEAD`] springs on: the position of
+/// that spring's far end b (its near end a is the current run's, in order; b lies a cloth's
+/// width away), and the spring record [`PREFETCH_AHEAD`] further, so that reading a record to
+/// find its b never waits on memory. Hints only: the results are the same bits.
+#[inline(always)]
+fn prefetch_ahead(x: &[DVec2], springs: &[PackedSpring], at: usize) {
+    if let Some(p) = springs
+        .get(at + PREFETCH_AHEAD)
+        .and_then(|s| x.get(s.b as usize))
+    {
+        // SAFETY: a prefetch reads nothing the program sees; the address is an element of x.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(std::ptr::from_ref(p).cast()) };
+    }
+    if let Some(s) = springs.get(at + 2 * PREFETCH_AHEAD) {
+        // SAFETY: as above; the address is an element of springs.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(std::ptr::from_ref(s).cast()) };
+    }
 }
 
 /// Four springs' d = x_a − x_b, two springs per register ([d0, d1], [d2, d3]), and their
@@ -188,7 +222,11 @@ pub unsafe fn for_each_projection(
     let mut run = Run::new(springs.first().map(|s| s.a));
     let mut octs = springs.chunks_exact(8);
     let (mut c0, mut c1) = ([0.0f64; 8], [0.0f64; 8]);
-    for oct in &mut octs {
+    let prefetch = x.len() >= PREFETCH_FROM_PARTICLES;
+    for (o, oct) in (&mut octs).enumerate() {
+        if prefetch {
+            prefetch_ahead(x, springs, 8 * o);
+        }
         let (q0, q1) = oct.split_at(4);
         // SAFETY: this function's caller guarantees AVX.
         unsafe {
@@ -373,6 +411,39 @@ mod tests {
         scatter_pairs(&springs, |s| spring_force(s, &x), |i, f| scalar[i] += f);
         assert_eq!(bits(&wide), bits(&scalar));
         assert!(wide[150].is_nan() && wide[0].is_finite());
+    }
+
+    /// A scene big enough for the pass to prefetch (a strip of particles two wide, each joined
+    /// to its neighbours along and across): the same forces as the scalar pass.
+    #[test]
+    fn prefetching_on_a_big_scene_gives_the_scalar_bits() {
+        if !available() {
+            return;
+        }
+        let n = PREFETCH_FROM_PARTICLES + 7;
+        let x: Vec<DVec2> = (0..n)
+            .map(|i| DVec2::new((i / 2) as f64 * 0.01, (i % 2) as f64 * 0.011))
+            .collect();
+        let mut springs = Vec::new();
+        for a in 0..n as u32 {
+            for b in [a + 1, a + 2, a + 3] {
+                if (b as usize) < n {
+                    springs.push(PackedSpring {
+                        a,
+                        b,
+                        rest: 0.0095,
+                        k: 1e4,
+                    });
+                }
+            }
+        }
+        let mut wide = vec![DVec2::ZERO; n];
+        // SAFETY: AVX is available (checked above).
+        unsafe { for_each_spring_force(&x, &springs, |i, f| wide[i] += f) };
+        let mut scalar = vec![DVec2::ZERO; n];
+        scatter_pairs(&springs, |s| spring_force(s, &x), |i, f| scalar[i] += f);
+        assert!(wide.iter().any(|f| *f != DVec2::ZERO));
+        assert_eq!(bits(&wide), bits(&scalar));
     }
 
     /// The AVX particle sweep and the portable one give the same x and v bits and the same
