@@ -340,7 +340,12 @@ pub fn side_panel(
                     "Real-time factor",
                     format!("{:.2}×", stats.real_time_factor),
                 );
-                row("Frames / s", format!("{:.0}", stats.fps));
+                // Paused, the app draws only on input (`pace`): say so, lest 4 look slow.
+                let fps = format!("{:.0}", stats.fps);
+                row(
+                    "Frames / s",
+                    if p.paused { fps + ", waits for input" } else { fps },
+                );
                 row("Energy", format!("{} J", number(energy.total(), 6)));
                 row("  kinetic", format!("{} J", number(energy.kinetic, 6)));
                 row("  gravity", format!("{} J", number(energy.potential_gravity, 6)));
