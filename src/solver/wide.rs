@@ -222,11 +222,7 @@ pub unsafe fn for_each_projection(
     let mut run = Run::new(springs.first().map(|s| s.a));
     let mut octs = springs.chunks_exact(8);
     let (mut c0, mut c1) = ([0.0f64; 8], [0.0f64; 8]);
-    let prefetch = x.len() >= PREFETCH_FROM_PARTICLES;
-    for (o, oct) in (&mut octs).enumerate() {
-        if prefetch {
-            prefetch_ahead(x, springs, 8 * o);
-        }
+    for oct in &mut octs {
         let (q0, q1) = oct.split_at(4);
         // SAFETY: this function's caller guarantees AVX.
         unsafe {
@@ -404,12 +400,7 @@ mod tests {
         springs.sort_by_key(|s| (s.a, s.b));
         assert!(springs.len() % 4 != 0);
 
-        let mut wide = vec![DVec2::ZERO; x.len()];
-        // SAFETY: AVX is available (checked above).
-        unsafe { for_each_spring_force(&x, &springs, |i, f| wide[i] += f) };
-        let mut scalar = vec![DVec2::ZERO; x.len()];
-        scatter_pairs(&springs, |s| spring_force(s, &x), |i, f| scalar[i] += f);
-        assert_eq!(bits(&wide), bits(&scalar));
+        let wide = forces_as_the_scalar_pass(&x, &springs);
         assert!(wide[150].is_nan() && wide[0].is_finite());
     }
 
@@ -437,13 +428,19 @@ mod tests {
                 }
             }
         }
-        let mut wide = vec![DVec2::ZERO; n];
-        // SAFETY: AVX is available (checked above).
-        unsafe { for_each_spring_force(&x, &springs, |i, f| wide[i] += f) };
-        let mut scalar = vec![DVec2::ZERO; n];
-        scatter_pairs(&springs, |s| spring_force(s, &x), |i, f| scalar[i] += f);
+        let wide = forces_as_the_scalar_pass(&x, &springs);
         assert!(wide.iter().any(|f| *f != DVec2::ZERO));
+    }
+
+    /// The AVX pass's forces, asserted to be the scalar pass's bits. The CPU must have AVX.
+    fn forces_as_the_scalar_pass(x: &[DVec2], springs: &[PackedSpring]) -> Vec<DVec2> {
+        let mut wide = vec![DVec2::ZERO; x.len()];
+        // SAFETY: the callers check that AVX is available.
+        unsafe { for_each_spring_force(x, springs, |i, f| wide[i] += f) };
+        let mut scalar = vec![DVec2::ZERO; x.len()];
+        scatter_pairs(springs, |s| spring_force(s, x), |i, f| scalar[i] += f);
         assert_eq!(bits(&wide), bits(&scalar));
+        wide
     }
 
     /// The AVX particle sweep and the portable one give the same x and v bits and the same
