@@ -30,6 +30,15 @@
 //! [`sim::PhysicsStep`] schedule's [`sim::StepSystems`]; `examples/` has a headless app, an
 //! app with its own drawing (`embed`) and a user force (`custom_force`).
 //!
+//! # The guide
+//!
+//! The long explanations live in the guide, in the repository's `docs/` (and in the package):
+//! `docs/library.md` (the sets, the components, what is checked, the crate's layout),
+//! `docs/integrators.md` (the step pass by pass, and what each integrator computes),
+//! `docs/scene-format.md`, `docs/command-line.md`, `docs/large-steps.md`,
+//! `docs/stability.md`, `docs/performance.md`, `docs/app.md` and `docs/testing.md`. These
+//! API docs say what each item is and does, and name the guide's page where the why is long.
+//!
 //! # Modules
 //!
 //! * [`sim`]: the headless simulation ([`sim::SimPlugin`]): particles and springs as entities,
@@ -69,6 +78,12 @@ pub mod solver;
 pub mod ui;
 
 pub use sim::SimPlugin;
+
+/// The README's Rust code, compiled and run as a doc-test so that the front door stays true.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+
 #[cfg(feature = "gui")]
 pub use ui::AppPlugin;
 

@@ -50,9 +50,28 @@ pub fn write_diagram_with(
     let png = stem.with_extension("png");
     let svg_area = SVGBackend::new(&svg, SIZE).into_drawing_area();
     draw(svg_area, rows, title, x_label)?;
-    let png_area = BitMapBackend::new(&png, SIZE).into_drawing_area();
-    draw(png_area, rows, title, x_label)?;
-    Ok(())
+    // Drawn into memory and encoded by the png crate (bevy's renderer uses it too), rather than
+    // through plotters' own encoder, which brings a second, older `image` crate to the build.
+    let mut rgb = vec![0u8; SIZE.0 as usize * SIZE.1 as usize * 3];
+    draw(
+        BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area(),
+        rows,
+        title,
+        x_label,
+    )?;
+    write_png(&png, &rgb, SIZE)
+}
+
+/// An 8-bit RGB image as a PNG file.
+fn write_png(path: &Path, rgb: &[u8], (width, height): (u32, u32)) -> Result<(), String> {
+    let fail = |e: &dyn std::fmt::Display| format!("cannot write {}: {e}", path.display());
+    let file = std::fs::File::create(path).map_err(|e| fail(&e))?;
+    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header().map_err(|e| fail(&e))?;
+    writer.write_image_data(rgb).map_err(|e| fail(&e))?;
+    writer.finish().map_err(|e| fail(&e))
 }
 
 fn draw<DB: DrawingBackend>(

@@ -60,7 +60,7 @@ pub unsafe fn for_each_spring_force(
 }
 
 /// From this many particles (4 MB of positions) the force pass asks for its data ahead of
-/// use. Measured on an Intel Xeon (window S, the README): on the 707² cloth (2 M springs) the
+/// use. Measured on an Intel Xeon (2026-12-03, `docs/performance.md`): on the 707² cloth (2 M springs) the
 /// pass ran 35–43 % faster with it, on 1000² and 2000² 8–15 %; on 500² it gained 2–8 % and on
 /// the cached 256² and 350² cloths it lost up to 7 %.
 const PREFETCH_FROM_PARTICLES: usize = 1 << 18;

@@ -1,4 +1,4 @@
-//! Scripted runs of the app (used by the GUI test and to make the README's screenshot):
+//! Scripted runs of the app (used by the GUI test and to make the screenshots in `docs/images/`):
 //! a screenshot after a delay, a status file, quitting after a delay.
 
 use super::controls::HelpOverlay;

@@ -3,7 +3,7 @@
 use bevy::prelude::*;
 use bevy_egui::{EguiContexts, egui};
 
-/// Every control: (input, action). The README's controls table says the same.
+/// Every control: (input, action). `docs/app.md`'s controls table says the same.
 pub const CONTROLS: &[(&str, &str)] = &[
     (
         "left press on a particle",

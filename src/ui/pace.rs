@@ -1,7 +1,7 @@
 //! Frames only while something moves. While the simulation runs the app draws continuously;
 //! paused, it waits for input (or [`IDLE_WAIT`]) instead of drawing an unchanging picture
 //! sixty times a second. Measured under Xvfb with software rendering, the paused empty canvas
-//! took 1.5 of the machine's two cores at 61–64 frames/s, and takes 0.13 at 4 (the README has
+//! took 1.5 of the machine's two cores at 61–64 frames/s, and takes 0.13 at 4 (`docs/app.md` has
 //! the figures).
 //!
 //! Waiting takes two things: the window's update mode ([`pace_frames`]), and an egui that does

@@ -3,7 +3,7 @@
 
 use crate::sim::Integrator;
 
-const REPORT: &str = include_str!("../../docs/work-precision.csv");
+const REPORT: &str = include_str!("../../docs/reports/work-precision.csv");
 
 /// The order of accuracy of each method.
 pub fn order(i: Integrator) -> u32 {
