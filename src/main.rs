@@ -21,7 +21,7 @@ struct Cli {
 /// Options of the desktop app (no subcommand).
 #[derive(Args, Debug, Clone)]
 struct AppArgs {
-    /// Scene file to open, or a built-in scene name (empty, rope, cloth32, soft_box).
+    /// Scene file to open, or a built-in scene name (empty, rope, cloth32, soft_box, cloth_on_ball, slope).
     #[arg(long, default_value = presets::DEFAULT_SCENE)]
     scene: String,
     /// Start running even if the scene starts paused.
@@ -56,7 +56,7 @@ enum BenchCommand {
     /// table and SVG/PNG diagrams.
     WorkPrecision {
         /// Directory to write into.
-        #[arg(long, default_value = "docs")]
+        #[arg(long, default_value = "docs/reports")]
         out: PathBuf,
         /// Shorter sweeps (a smoke run, not the committed report).
         #[arg(long)]
@@ -66,7 +66,7 @@ enum BenchCommand {
     /// count; writes CSV and a markdown table.
     Perf {
         /// Directory to write into.
-        #[arg(long, default_value = "docs")]
+        #[arg(long, default_value = "docs/reports")]
         out: PathBuf,
         /// Thread counts to measure, each 1 to 256 (default: 1 and all cores).
         #[arg(long, value_delimiter = ',')]
@@ -83,7 +83,7 @@ enum BenchCommand {
     /// a markdown table.
     Scale {
         /// Directory to write into.
-        #[arg(long, default_value = "docs")]
+        #[arg(long, default_value = "docs/reports")]
         out: PathBuf,
         /// Cloth widths (particles per side; default about 1, 2, 4, 8 and 16 M springs).
         #[arg(long, value_delimiter = ',')]
@@ -107,14 +107,14 @@ enum BenchCommand {
     /// against the true equilibrium; writes CSV, markdown and diagrams.
     LargeSteps {
         /// Directory to write into.
-        #[arg(long, default_value = "docs")]
+        #[arg(long, default_value = "docs/reports")]
         out: PathBuf,
     },
     /// Largest stable dt per hard scene and integrator (bisection) against the theoretical
     /// limit, and the energy change at half that dt; writes CSV and a markdown table.
     Stability {
         /// Directory to write into.
-        #[arg(long, default_value = "docs")]
+        #[arg(long, default_value = "docs/reports")]
         out: PathBuf,
         /// Directory of the hard scenes.
         #[arg(long, default_value = "assets/scenes/hard")]
@@ -286,10 +286,13 @@ fn run(args: RunArgs) -> ExitCode {
         if r.springs_torn > 0 {
             println!("{} springs tore", r.springs_torn);
         }
+        if r.contacts > 0 {
+            println!("{} contacts in the last step", r.contacts);
+        }
         if let Some(t) = &r.pass_seconds {
             let share = |s: f64| 100.0 * s / t.total().max(1e-12);
             println!(
-                "passes: forces {:.3} s ({:.0}%), integrate {:.3} s ({:.0}%), damping {:.3} s ({:.0}%), ground {:.3} s ({:.0}%), advance {:.3} s ({:.0}%)",
+                "passes: forces {:.3} s ({:.0}%), integrate {:.3} s ({:.0}%), damping {:.3} s ({:.0}%), ground {:.3} s ({:.0}%), advance {:.3} s ({:.0}%), contact {:.3} s ({:.0}%)",
                 t.forces,
                 share(t.forces),
                 t.integrate,
@@ -299,7 +302,9 @@ fn run(args: RunArgs) -> ExitCode {
                 t.ground,
                 share(t.ground),
                 t.advance,
-                share(t.advance)
+                share(t.advance),
+                t.contact,
+                share(t.contact)
             );
         }
     }

@@ -132,6 +132,9 @@ pub struct RunReport {
     pub finite: bool,
     /// Springs broken by tearing during the run (0 when tearing is off).
     pub springs_torn: u64,
+    /// Particle–surface contacts (ground and obstacles) resolved in the last step; 0 when the
+    /// scene has no obstacles and no contact settings (the contact pass does not run).
+    pub contacts: usize,
     /// Mean conjugate-gradient iterations per step (implicit Euler only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub cg_iterations_per_step: Option<f64>,
@@ -143,6 +146,9 @@ pub struct RunReport {
     /// Wall time per pass, summed over the run (`--profile` only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pass_seconds: Option<sim::PassTimes>,
+    /// The contact pass's wall time over the run (`--profile` only), s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contact_seconds: Option<f64>,
     /// The 1-based step that produced a non-finite value, if one did. The final state (and
     /// `--out`) is then the last finite one, at the end of the tick before.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -283,10 +289,12 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
         omega_max_bound: stability.omega_bound,
         finite: blowup_step.is_none() && solver.state_is_finite(),
         springs_torn: world.resource::<sim::Tearing>().torn,
+        contacts: world.resource::<sim::Obstacles>().contacts,
         cg_iterations_per_step: solve.cg_iterations_per_step,
         iterations: params.iterations,
         solve,
         pass_seconds: world.get_resource::<sim::PassTimes>().cloned(),
+        contact_seconds: world.get_resource::<sim::PassTimes>().map(|t| t.contact),
         blowup_step,
     };
     Ok(Run { report, app })

@@ -194,6 +194,22 @@ fn bad_scene_files() {
         &format!("{}:3:", broken.display()),
     );
 
+    // A newcomer's first scene with a typo: it used to run with mass 1, unpinned, and exit 0.
+    let typo = temp("typo.ron");
+    std::fs::write(
+        &typo,
+        "(gravity: (0.0, -9.8), damping: 1.0, ground: None, integrator: SymplecticEuler, \
+         dt: 0.001,\n particles: [(pos: (0.5, 0.5), masss: 5.0, pined: true)])",
+    )
+    .unwrap();
+    let o = hooke(&["run", "--scene", typo.to_str().unwrap()]);
+    assert_bad_input(&o, &format!("{}:2:", typo.display()));
+    assert!(
+        stderr(&o).contains("unknown field `masss` in a particle; did you mean `mass`?"),
+        "{}",
+        stderr(&o)
+    );
+
     let invalid = temp("invalid.ron");
     std::fs::write(
         &invalid,

@@ -526,18 +526,19 @@ fn every_control_works_under_real_input_and_the_log_stays_quiet() {
     assert!(bad_lines(&s.log()).is_empty(), "empty canvas:\n{}", s.log());
 
     // The panel's tearing field takes a typed percentage: 30 is a strain of 0.3 (it was read
-    // as 30, 3000 %, and clamped to 200 %). The row's place is the empty scene's panel layout.
-    s.move_px(95, 284);
+    // as 30, 3000 %, and clamped to 200 %). The row's place is the empty scene's panel
+    // layout, under the contact row.
+    s.move_px(95, 305);
     s.x(&["click", "1"]);
     s.expect("tearing on", |st| st["tear"] == 0.6);
-    s.move_px(242, 284);
+    s.move_px(242, 305);
     s.x(&["click", "1"]);
     std::thread::sleep(Duration::from_millis(300));
     s.x(&["windowfocus", "--sync", &s.window]);
     s.x(&["type", "--delay", "80", "30"]);
     s.key("Return");
     s.expect("30 % typed", |st| st["tear"] == 0.3);
-    s.move_px(95, 284);
+    s.move_px(95, 305);
     s.x(&["click", "1"]);
     s.expect("tearing off", |st| st["tear"].is_null());
 

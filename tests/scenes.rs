@@ -90,6 +90,98 @@ fn malformed_ron_names_file_line_and_column() {
     assert!(msg.starts_with("bad.ron:4:"), "{msg}");
 }
 
+/// A misspelled field anywhere in the format is an error that names it, the name it could
+/// have meant and where it is; before, serde skipped it and the scene ran with the default
+/// (the particle below weighed 1 kg and was free).
+#[test]
+fn a_misspelled_field_is_named_with_the_field_it_could_have_meant() {
+    // A field misspelled where it stands: (the text, its typo, the line, what the message names).
+    let mut cases = vec![
+        (
+            "pinned: true),",
+            "pined: true),".to_string(),
+            8,
+            ["`pined`", "a particle", "`pinned`"],
+        ),
+        (
+            "mass: 1.0, pinned: false",
+            "masss: 5.0, pinned: false".into(),
+            9,
+            ["`masss`", "a particle", "`mass`"],
+        ),
+        (
+            "stiffness: 10000.0, rest",
+            "stifness: 10000.0, rest".into(),
+            12,
+            ["`stifness`", "a spring", "`stiffness`"],
+        ),
+    ];
+    // An optional field written with a typo, on a line of its own after dt (line 7).
+    let dt = "    dt: 0.0001,";
+    for (line, names) in [
+        ("taer: Some(0.2)", ["`taer`", "the scene", "`tear`"]),
+        (
+            "iterations: (xpbd_substep: 4)",
+            ["`xpbd_substep`", "`iterations`", "`xpbd_substeps`"],
+        ),
+        (
+            "click: Some((radus: 0.1))",
+            ["`radus`", "`click`", "`radius`"],
+        ),
+        (
+            "generate: [Grid(cols: 2, rows: 2, min: (0.0, 0.0), max: (1.0, 1.0), sheer: false)]",
+            ["`sheer`", "`shear`", "`generate`"],
+        ),
+        (
+            "generate: [Chain(from: (0.0, 0.0), to: (1.0, 0.0), segment: 3)]",
+            ["`segment`", "`segments`", "`generate`"],
+        ),
+        (
+            "obstacles: [Circle(centre: (0.5, 0.5), radius: 0.1)]",
+            ["`centre`", "`center`", "`obstacles`"],
+        ),
+        (
+            "contact: Some((frction: 0.5))",
+            ["`frction`", "`friction`", "`contact`"],
+        ),
+    ] {
+        cases.push((dt, format!("{dt}\n    {line},"), 7, names));
+    }
+    for (from, to, line, names) in cases {
+        let text = scene_text(|s| s.replacen(from, &to, 1));
+        assert_ne!(
+            text,
+            scene_text(|s| s.to_string()),
+            "the edit {from:?} applies"
+        );
+        let e = parse(&text).expect_err(&to);
+        let msg = e.to_string();
+        assert!(
+            matches!(e, SceneError::Parse { line: l, .. } if l == line),
+            "{msg}"
+        );
+        assert!(msg.starts_with(&format!("bad.ron:{line}:")), "{msg}");
+        for name in names {
+            assert!(msg.contains(name), "{msg} should name {name}");
+        }
+    }
+}
+
+/// A misspelled variant is named with the variants it could have meant.
+#[test]
+fn a_misspelled_variant_is_named_with_the_variant_it_could_have_meant() {
+    let e = parse(&scene_text(|s| s.replace("SymplecticEuler", "Xpdb"))).unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        msg.contains("`Xpdb`") && msg.contains("did you mean `Xpbd`"),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("SymplecticEuler"),
+        "lists the integrators: {msg}"
+    );
+}
+
 #[test]
 fn unknown_integrator_is_a_parse_error() {
     let e = parse(&scene_text(|s| s.replace("SymplecticEuler", "Leapfrog"))).unwrap_err();

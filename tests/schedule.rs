@@ -27,6 +27,7 @@ fn systems_for_unused_features_do_not_run() {
             advance: 250,
             sweeps: 250,
             tear: 0,
+            contact: 0,
         }
     );
 

@@ -1,10 +1,14 @@
-//! The scene file format (RON). See the README for the schema and an example.
+//! The scene file format (RON). `docs/scene-format.md` lists every field with an example.
+//!
+//! Every struct and struct variant denies unknown fields: a misspelled optional field would
+//! otherwise be ignored and the scene run with its default (see `scene::typo`).
 
 use crate::sim::Integrator;
 use serde::{Deserialize, Serialize};
 
 /// A scene as written in a `.ron` file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Scene {
     /// Gravitational acceleration (x, y), m/s².
     pub gravity: (f64, f64),
@@ -40,6 +44,111 @@ pub struct Scene {
     /// `iterations: (projective: 20)`.
     #[serde(default, skip_serializing_if = "is_default_iterations")]
     pub iterations: crate::sim::Iterations,
+    /// Static shapes every particle collides with (whatever `contact` says: as points when it
+    /// gives no radius).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub obstacles: Vec<ObstacleDef>,
+    /// Contact: the particles' radius and the friction and restitution of every contact.
+    /// `None` keeps the assignment's ground: points, clamped, frictionless.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact: Option<crate::sim::ContactSettings>,
+}
+
+/// An obstacle as written in a scene: a shape where it stands (it does not move unless a
+/// system of the app's user moves it).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum ObstacleDef {
+    /// A disc.
+    Circle {
+        /// Its centre (x, y), m.
+        center: (f64, f64),
+        /// Its radius, m.
+        radius: f64,
+    },
+    /// A rectangle.
+    Box {
+        /// Its centre (x, y), m.
+        center: (f64, f64),
+        /// Half its width and height, m.
+        half: (f64, f64),
+        /// Its rotation, rad (counter-clockwise); default 0.
+        #[serde(default)]
+        angle: f64,
+    },
+    /// A segment from `a` to `b`; a capsule when `thickness` > 0.
+    Segment {
+        /// One end (x, y), m.
+        a: (f64, f64),
+        /// The other end.
+        b: (f64, f64),
+        /// The capsule's radius, m; default 0 (a line).
+        #[serde(default)]
+        thickness: f64,
+    },
+}
+
+impl ObstacleDef {
+    /// The shape in its own frame and where it stands: a segment's frame is centred on its
+    /// midpoint.
+    pub fn placed(&self) -> crate::solver::Placed {
+        use crate::solver::{Placed, Shape};
+        use glam::DVec2;
+        let (shape, center, angle) = match *self {
+            ObstacleDef::Circle { center, radius } => {
+                (Shape::Circle { radius }, DVec2::from(center), 0.0)
+            }
+            ObstacleDef::Box {
+                center,
+                half,
+                angle,
+            } => (
+                Shape::Box {
+                    half: DVec2::from(half),
+                },
+                DVec2::from(center),
+                angle,
+            ),
+            ObstacleDef::Segment { a, b, thickness } => {
+                let (a, b) = (DVec2::from(a), DVec2::from(b));
+                let mid = (a + b) * 0.5;
+                let shape = Shape::Segment {
+                    a: a - mid,
+                    b: b - mid,
+                    thickness,
+                };
+                (shape, mid, 0.0)
+            }
+        };
+        Placed::at(shape, center, angle)
+    }
+
+    /// The obstacle as written for a placed shape (the inverse of [`Self::placed`], with a
+    /// segment's ends in the world).
+    pub fn from_placed(p: &crate::solver::Placed) -> Self {
+        use crate::solver::Shape;
+        let c = p.pose.center;
+        match p.shape {
+            Shape::Circle { radius } => ObstacleDef::Circle {
+                center: (c.x, c.y),
+                radius,
+            },
+            Shape::Box { half } => ObstacleDef::Box {
+                center: (c.x, c.y),
+                half: (half.x, half.y),
+                angle: p.pose.angle,
+            },
+            Shape::Segment { a, b, thickness } => {
+                let turn = glam::DVec2::from_angle(p.pose.angle);
+                let (a, b) = (c + turn.rotate(a), c + turn.rotate(b));
+                ObstacleDef::Segment {
+                    a: (a.x, a.y),
+                    b: (b.x, b.y),
+                    thickness,
+                }
+            }
+        }
+    }
 }
 
 fn is_default_iterations(i: &crate::sim::Iterations) -> bool {
@@ -47,6 +156,7 @@ fn is_default_iterations(i: &crate::sim::Iterations) -> bool {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 /// A particle as written in a scene.
 pub struct ParticleDef {
     /// Position (x, y), m.
@@ -63,6 +173,7 @@ pub struct ParticleDef {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 /// A spring as written in a scene.
 pub struct SpringDef {
     /// Index of one end.
@@ -78,6 +189,7 @@ pub struct SpringDef {
 
 /// Parametric particle layouts.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub enum Generator {
     /// A `cols` × `rows` grid spanning `min`..`max`, row 0 at the top (y = max.y). Particle
     /// `r * cols + c` sits at (min.x + c/(cols-1)·w, max.y − r/(rows-1)·h). Springs, each once, per
@@ -142,6 +254,7 @@ pub enum Pin {
 
 /// What a left click adds: a particle joined to every particle within `radius`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ClickRules {
     #[serde(default = "default_radius")]
     /// Join every particle within this distance, m; default 0.15.
@@ -198,6 +311,8 @@ impl Default for Scene {
             start_paused: false,
             tear: p.tear,
             iterations: p.iterations,
+            obstacles: vec![],
+            contact: p.contact,
         }
     }
 }

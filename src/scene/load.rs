@@ -98,7 +98,7 @@ impl LoadedScene {
             path: path.to_owned(),
             line: e.span.start.line,
             col: e.span.start.col,
-            message: e.code.to_string(),
+            message: super::typo::message(&e.code),
         })?;
         Self::from_scene(scene, Some(path.to_owned()))
     }
@@ -140,8 +140,10 @@ pub fn load_into_world(world: &mut World, loaded: &LoadedScene) {
         stiffness_override: None,
         tear: s.tear,
         iterations: s.iterations,
+        contact: s.contact,
     };
     despawn_contents(world, params);
+    replace_obstacles(world, &s.obstacles);
     spawn_streamed(
         world,
         loaded.scene.particle_defs(),
@@ -173,6 +175,44 @@ fn despawn_contents(world: &mut World, params: SimParams) {
     }
     *world.resource_mut::<SimParams>() = params;
     world.insert_resource(Solver::default());
+}
+
+/// Despawns every obstacle and spawns the scene's, in its order.
+fn replace_obstacles(world: &mut World, obstacles: &[super::format::ObstacleDef]) {
+    let old: Vec<Entity> = world
+        .query_filtered::<Entity, With<Obstacle>>()
+        .iter(world)
+        .collect();
+    for e in old {
+        world.despawn(e);
+    }
+    for o in obstacles {
+        let placed = o.placed();
+        world.spawn((
+            Obstacle(placed.shape),
+            ObstaclePose {
+                center: placed.pose.center,
+                angle: placed.pose.angle,
+            },
+        ));
+    }
+}
+
+/// The world's obstacles at their current poses, in the order they were made, as a scene writes
+/// them.
+pub fn obstacle_defs(world: &mut World) -> Vec<super::format::ObstacleDef> {
+    let mut all: Vec<((CreationOrder, Entity), crate::solver::Placed)> = world
+        .query::<(Entity, &CreationOrder, &Obstacle, &ObstaclePose)>()
+        .iter(world)
+        .map(|(e, order, o, pose)| {
+            let placed = crate::solver::Placed::at(o.0, pose.center, pose.angle);
+            ((*order, e), placed)
+        })
+        .collect();
+    all.sort_by_key(|(key, _)| *key);
+    all.iter()
+        .map(|(_, p)| super::format::ObstacleDef::from_placed(p))
+        .collect()
 }
 
 /// Spawns particles and springs (in that order, so their creation order is the list's);
@@ -247,6 +287,7 @@ pub fn snapshot(world: &mut World) -> Scene {
     let click = world
         .get_resource::<CurrentScene>()
         .and_then(|c| c.0.scene.click);
+    let obstacles = obstacle_defs(world);
     Scene {
         gravity: (params.gravity.x, params.gravity.y),
         damping: params.damping,
@@ -260,6 +301,8 @@ pub fn snapshot(world: &mut World) -> Scene {
         start_paused: false,
         tear: params.tear,
         iterations: params.iterations,
+        obstacles,
+        contact: params.contact,
     }
 }
 

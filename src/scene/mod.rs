@@ -5,6 +5,7 @@ pub mod generate;
 pub mod load;
 pub mod presets;
 mod reserve;
+mod typo;
 pub mod validate;
 
 pub use format::*;

@@ -10,6 +10,11 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("rope", include_str!("../../assets/scenes/rope.ron")),
     ("cloth32", include_str!("../../assets/scenes/cloth32.ron")),
     ("soft_box", include_str!("../../assets/scenes/soft_box.ron")),
+    (
+        "cloth_on_ball",
+        include_str!("../../assets/scenes/cloth_on_ball.ron"),
+    ),
+    ("slope", include_str!("../../assets/scenes/slope.ron")),
 ];
 
 /// The scene the app opens with: the assignment's empty canvas.

@@ -38,6 +38,24 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
         let (name, rule) = (Iterations::NAMES[field], Iterations::RULE);
         p.push(format!("iterations.{name}: {rule}, got {v}"));
     }
+    if let Some(c) = &scene.contact
+        && let Some((field, v, rule)) = c.problem()
+    {
+        p.push(format!("contact.{field}: {rule}, got {v}"));
+    }
+    for (i, o) in scene.obstacles.iter().enumerate() {
+        if let Some((what, v)) = o.placed().problem() {
+            let rule = match what {
+                "length" => "a segment needs two different ends".to_string(),
+                "thickness" => format!("must be finite and >= 0, got {v}"),
+                _ if what.starts_with("center") || what == "angle" || what == "end" => {
+                    "must be finite".to_string()
+                }
+                _ => format!("must be finite and > 0, got {v}"),
+            };
+            p.push(format!("obstacles[{i}]: {what}: {rule}"));
+        }
+    }
     if let Some(c) = &scene.click {
         if !(c.radius.is_finite() && c.radius >= 0.0) {
             p.push(format!(

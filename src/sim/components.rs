@@ -27,7 +27,7 @@ pub struct CreationOrder(pub u64);
 
 /// The hook of [`Particle`]: hands out the next serial (when the world has the
 /// [`Serials`] of [`crate::sim::SimPlugin`]).
-fn assign_creation_order(mut world: DeferredWorld, context: HookContext) {
+pub(crate) fn assign_creation_order(mut world: DeferredWorld, context: HookContext) {
     let unset = world
         .get::<CreationOrder>(context.entity)
         .is_some_and(|o| o.0 == 0);

@@ -7,6 +7,7 @@
 //! is drawn. Mended, the status goes back to running (still paused).
 
 use super::components::{Mass, Particle, Spring};
+use super::obstacles::{Obstacle, ObstaclePose, ObstacleVelocity};
 pub use super::params::InputProblem;
 use super::params::{CgSettings, Iterations, SimParams, SimStatus, TickPlan};
 use bevy::prelude::*;
@@ -62,7 +63,55 @@ pub fn check_params(p: &SimParams) -> Option<InputProblem> {
         let field = super::params::ITERATION_FIELDS[field];
         return Some(problem(field, v as f64, Iterations::RULE));
     }
+    if let Some((field, v, rule)) = p.contact.as_ref().and_then(|c| c.problem()) {
+        let field = match field {
+            "radius" => "SimParams.contact.radius",
+            "friction" => "SimParams.contact.friction",
+            "restitution" => "SimParams.contact.restitution",
+            _ => "SimParams.contact.particles",
+        };
+        return Some(problem(field, v, rule));
+    }
     None
+}
+
+/// The problem with an obstacle's shape, pose or velocity, if any.
+pub fn check_obstacle(
+    e: Entity,
+    shape: &Obstacle,
+    pose: &ObstaclePose,
+    velocity: &ObstacleVelocity,
+) -> Option<InputProblem> {
+    let placed = crate::solver::Placed {
+        shape: shape.0,
+        pose: crate::solver::Pose {
+            center: pose.center,
+            angle: pose.angle,
+            velocity: velocity.linear,
+            angular_velocity: velocity.angular,
+        },
+    };
+    let (what, v) = placed.problem()?;
+    let (field, rule) = match what {
+        "center.x" | "center.y" => ("ObstaclePose.center", "must be finite"),
+        "angle" => ("ObstaclePose.angle", "must be finite"),
+        "velocity.x" | "velocity.y" => ("ObstacleVelocity.linear", "must be finite"),
+        "angular velocity" => ("ObstacleVelocity.angular", "must be finite"),
+        "radius" => ("Obstacle: the circle's radius", "must be finite and > 0"),
+        "half.x" | "half.y" => ("Obstacle: the box's half-extents", "must be finite and > 0"),
+        "thickness" => (
+            "Obstacle: the segment's thickness",
+            "must be finite and >= 0",
+        ),
+        "length" => ("Obstacle: the segment", "needs two different ends"),
+        _ => ("Obstacle: the segment's ends", "must be finite"),
+    };
+    Some(InputProblem {
+        field,
+        value: Some(v),
+        entity: Some(e),
+        rule,
+    })
 }
 
 /// The problem with the tick plan, if any (the tick planner checks it too, before sizing the
@@ -154,6 +203,7 @@ pub fn check_inputs(
     springs: Query<(Entity, &Spring)>,
     particles: Query<(), With<Particle>>,
     changed: ChangedInputs,
+    obstacles: Query<(Entity, &Obstacle, &ObstaclePose, &ObstacleVelocity)>,
 ) {
     let is_particle = |e: Entity| particles.contains(e);
     let standing = match *status {
@@ -172,6 +222,12 @@ pub fn check_inputs(
     let found = still
         .or_else(|| check_params(&params))
         .or_else(|| check_settings(&plan, &cg))
+        .or_else(|| {
+            // A handful of entities, whose poses move every tick: all of them, every tick.
+            obstacles
+                .iter()
+                .find_map(|(e, o, pose, vel)| check_obstacle(e, o, pose, vel))
+        })
         .or_else(|| changed.masses.iter().find_map(|(e, m)| check_mass(e, m)))
         .or_else(|| {
             changed

@@ -10,6 +10,7 @@
 pub mod components;
 pub mod grid;
 pub mod inputs;
+pub mod obstacles;
 pub mod params;
 pub mod profile;
 pub mod pull;
@@ -23,6 +24,7 @@ pub mod watch;
 pub use crate::solver::PARALLEL_MIN_SPRINGS;
 pub use crate::solver::SolveStats;
 pub use components::*;
+pub use obstacles::{Obstacle, ObstaclePose, ObstacleVelocity, Obstacles};
 pub use params::*;
 pub use profile::PassTimes;
 pub use pull::Attraction;

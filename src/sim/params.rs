@@ -3,7 +3,7 @@
 use bevy::math::DVec2;
 use bevy::prelude::*;
 
-pub use crate::solver::{Integrator, Iterations};
+pub use crate::solver::{ContactSettings, Integrator, Iterations};
 
 /// The solver's threads as a resource (the core's [`crate::solver::Threads`]): all cores by
 /// default, one to run everything on the calling thread.
@@ -89,6 +89,10 @@ pub struct SimParams {
     pub tear: Option<f64>,
     /// Iteration counts of implicit Euler, projective dynamics and XPBD.
     pub iterations: Iterations,
+    /// Contact: the particles' radius and the friction and restitution of every contact (the
+    /// ground's and the obstacles'). `None`: particles are points, the ground clamps with no
+    /// friction, and obstacles ([`crate::sim::Obstacle`]) are frictionless and inelastic.
+    pub contact: Option<ContactSettings>,
 }
 
 impl Default for SimParams {
@@ -103,6 +107,7 @@ impl Default for SimParams {
             stiffness_override: None,
             tear: None,
             iterations: Iterations::default(),
+            contact: None,
         }
     }
 }
@@ -196,6 +201,8 @@ pub struct PassCounts {
     pub sweeps: u64,
     /// Tear checks (one per tick, only while [`SimParams::tear`] is set).
     pub tear: u64,
+    /// Contact passes (only while the scene has obstacles, or contact with a ground).
+    pub contact: u64,
 }
 
 /// Springs broken by tearing since the scene was loaded, and those found this tick (despawned

@@ -23,6 +23,8 @@ pub struct PassTimes {
     pub ground: f64,
     /// The position update, s.
     pub advance: f64,
+    /// The contact pass (obstacles, and the ground when contact is set), s.
+    pub contact: f64,
     #[serde(skip)]
     mark: Option<Instant>,
 }
@@ -30,7 +32,7 @@ pub struct PassTimes {
 impl PassTimes {
     /// All passes, s.
     pub fn total(&self) -> f64 {
-        self.forces + self.integrate + self.damping + self.ground + self.advance
+        self.forces + self.integrate + self.damping + self.ground + self.advance + self.contact
     }
 }
 
@@ -68,7 +70,10 @@ pub fn enable(app: &mut App) {
             lap(|t| &mut t.ground)
                 .after(StepSystems::Ground)
                 .before(StepSystems::Advance),
-            lap(|t| &mut t.advance).after(StepSystems::Advance),
+            lap(|t| &mut t.advance)
+                .after(StepSystems::Advance)
+                .before(StepSystems::Collide),
+            lap(|t| &mut t.contact).after(StepSystems::Collide),
         ));
     });
 }

@@ -13,6 +13,7 @@ use super::tear;
 use crate::solver::step;
 use bevy::app::{FixedMain, RunFixedMainLoop, RunFixedMainLoopSystems};
 use bevy::ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
+use bevy::math::DVec2;
 use bevy::prelude::*;
 use bevy::time::Fixed;
 use std::time::{Duration, Instant};
@@ -52,7 +53,7 @@ pub type PhysicsSet = PhysicsSystems;
 #[derive(ScheduleLabel, Debug, Clone, PartialEq, Eq, Hash)]
 pub struct PhysicsStep;
 
-/// The passes of one step, in [`PhysicsStep`], in this order (the README's step semantics):
+/// The passes of one step, in [`PhysicsStep`], in this order (`docs/integrators.md`):
 ///
 /// ```
 /// # use bevy::prelude::*;
@@ -79,6 +80,10 @@ pub enum StepSystems {
     /// 5. The position update, x += dt u, with u the integrator's drift velocity; checks
     ///    finiteness.
     Advance,
+    /// 6. Contact with the obstacles, and with the ground when [`SimParams::contact`] is set
+    ///    ([`crate::solver::contact`]); then the obstacles move by their velocities. Runs only
+    ///    when the scene has obstacles or contact with a ground.
+    Collide,
 }
 
 /// The old name of [`StepSystems`].
@@ -221,6 +226,7 @@ impl Plugin for SimPlugin {
             .init_resource::<StepBudget>()
             .init_resource::<CgSettings>()
             .init_resource::<SolverThreads>()
+            .init_resource::<super::obstacles::Obstacles>()
             .init_resource::<super::components::Serials>();
 
         app.configure_sets(
@@ -236,7 +242,10 @@ impl Plugin for SimPlugin {
         .add_systems(
             FixedUpdate,
             (
-                (check_tick, sync_tick.run_if(inputs::inputs_valid))
+                (
+                    check_tick,
+                    (sync_tick, super::obstacles::gather_obstacles).run_if(inputs::inputs_valid),
+                )
                     .chain()
                     .in_set(PhysicsSystems::Prepare),
                 run_steps
@@ -248,6 +257,10 @@ impl Plugin for SimPlugin {
                     .in_set(PhysicsSystems::Writeback)
                     .run_if(inputs::inputs_valid)
                     .run_if(resource_changed::<Solver>),
+                super::obstacles::write_back_obstacles
+                    .in_set(PhysicsSystems::Writeback)
+                    .run_if(inputs::inputs_valid)
+                    .run_if(resource_changed::<super::obstacles::Obstacles>),
                 (
                     tear::find_torn_springs.run_if(tear::tearing_enabled),
                     tear::remove_torn_springs.run_if(tear::tears_pending),
@@ -281,6 +294,7 @@ impl Plugin for SimPlugin {
                         StepSystems::Damping,
                         StepSystems::Ground,
                         StepSystems::Advance,
+                        StepSystems::Collide,
                     )
                         .chain(),
                 )
@@ -313,6 +327,7 @@ impl Plugin for SimPlugin {
                     )
                         .chain()
                         .in_set(StepSystems::Advance),
+                    collide.run_if(contact_enabled).in_set(StepSystems::Collide),
                 ));
         });
     }
@@ -356,9 +371,28 @@ pub fn damping_enabled(params: Res<SimParams>) -> bool {
     params.damping != 0.0
 }
 
-/// Run condition: the scene has a ground.
+/// Run condition: the scene has a ground that the ground pass clamps (with contact set, the
+/// contact pass handles the ground instead, with the particles' radius and friction).
 pub fn ground_enabled(params: Res<SimParams>) -> bool {
-    params.ground.is_some()
+    params.ground.is_some() && params.contact.is_none()
+}
+
+/// Run condition: the contact pass has something to do: obstacles, or contact with a ground.
+pub fn contact_enabled(
+    params: Res<SimParams>,
+    obstacles: Res<super::obstacles::Obstacles>,
+) -> bool {
+    contact_needed(&params, &obstacles)
+}
+
+fn contact_needed(params: &SimParams, obstacles: &super::obstacles::Obstacles) -> bool {
+    !obstacles.placed.is_empty() || (params.contact.is_some() && params.ground.is_some())
+}
+
+/// The ground the step's own clamp handles (the ground pass, the fused sweep, XPBD's substeps):
+/// none when contact is set, since the contact pass then does.
+pub fn clamped_ground(params: &SimParams) -> Option<f64> {
+    params.ground.filter(|_| params.contact.is_none())
 }
 
 // ---- the passes: each system runs one of the core's passes ([`crate::solver::step`]) ----
@@ -397,7 +431,7 @@ fn integrate(
         integrator: params.integrator,
         dt: params.dt,
         gravity: params.gravity,
-        ground: params.ground,
+        ground: clamped_ground(&params),
         iterations: params.iterations,
         cg: settings.0,
     };
@@ -428,7 +462,9 @@ fn ground_contact(
     threads: Res<SolverThreads>,
     mut n: ResMut<PassCounts>,
 ) {
-    let Some(ground) = params.ground else { return };
+    let Some(ground) = clamped_ground(&params) else {
+        return;
+    };
     let (integrator, dt) = (params.integrator, params.dt);
     step::ground(&mut solver.state, integrator, dt, ground, &threads);
     n.ground += 1;
@@ -449,17 +485,52 @@ fn advance_positions(
 fn particle_sweep(
     mut solver: ResMut<Solver>,
     params: Res<SimParams>,
+    obstacles: Res<super::obstacles::Obstacles>,
     threads: Res<SolverThreads>,
     mut n: ResMut<PassCounts>,
 ) {
     let (integrator, dt) = (params.integrator, params.dt);
-    let (mu, ground) = (params.damping, params.ground);
+    if integrator == Integrator::ExplicitEuler && contact_needed(&params, &obstacles) {
+        // The contact pass needs the velocity the step moves with (the separate kick keeps it).
+        step::keep_start_velocity(&mut solver.state);
+    }
+    let (mu, ground) = (params.damping, clamped_ground(&params));
     let sweep = step::sweep(&mut solver.state, integrator, dt, mu, ground, &threads);
     n.integrate += sweep.motion.kicks() as u64;
     n.damping += sweep.decay.is_some() as u64;
     n.ground += sweep.ground.is_some() as u64;
     n.advance += 1;
     n.sweeps += 1;
+}
+
+/// The contact pass, then the obstacles move by their velocities.
+fn collide(
+    mut solver: ResMut<Solver>,
+    mut obstacles: ResMut<super::obstacles::Obstacles>,
+    params: Res<SimParams>,
+    threads: Res<SolverThreads>,
+    mut n: ResMut<PassCounts>,
+) {
+    let around = crate::solver::Surroundings {
+        obstacles: &obstacles.placed,
+        ground: params.ground,
+        settings: params.contact,
+    };
+    let (integrator, dt, g) = (params.integrator, params.dt, params.gravity);
+    let contacts = step::collide(&mut solver.state, integrator, dt, g, &around, &threads);
+    let o = obstacles.bypass_change_detection();
+    o.contacts = contacts;
+    let mut moved = false;
+    for p in &mut o.placed {
+        if p.pose.velocity != DVec2::ZERO || p.pose.angular_velocity != 0.0 {
+            p.advance(dt);
+            moved = true;
+        }
+    }
+    if moved {
+        obstacles.set_changed();
+    }
+    n.contact += 1;
 }
 
 /// Runs this tick's steps; stops at the first step that produced a non-finite value.

@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 /// The time integrators. Every one is followed by the same damping and ground passes
-/// (see the README's step semantics).
+/// (see `docs/integrators.md`).
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize, clap::ValueEnum,
 )]
@@ -32,7 +32,7 @@ pub enum Integrator {
 }
 
 impl Integrator {
-    /// Every integrator, in the order of the README's table.
+    /// Every integrator, in the order of the table in `docs/integrators.md`.
     pub const ALL: [Integrator; 7] = [
         Integrator::ExplicitEuler,
         Integrator::SymplecticEuler,
@@ -83,7 +83,7 @@ impl Integrator {
 /// params.iterations.xpbd_substeps = 20;
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct Iterations {
     /// Implicit Euler: Newton steps per time step (each a linear solve by CG). 1 is the classic
     /// step linearised at the start of the step; more converge to the exact backward Euler

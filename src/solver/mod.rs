@@ -8,6 +8,9 @@
 //! * [`state`]: the packed arrays ([`State`], [`PackedSpring`]) and what is read from them
 //!   (energy, finiteness).
 //! * [`method`]: the integrators and their iteration counts.
+//! * [`obstacle`]: the geometry of contact: obstacle shapes, their distance and a swept test
+//!   against tunnelling, and one particle's response (friction, restitution).
+//! * [`contact`]: the contact pass that the step runs after the position update.
 //! * [`step`]: the passes of one step, and the methods' buffers ([`Workspace`]).
 //! * [`stability`]: how close a scene is to its integrator's limit.
 //! * The machinery, private to the crate: the scalar and AVX kernels, the thread splits and
@@ -16,11 +19,13 @@
 //!   boundaries) that only the packing maintains.
 
 pub(crate) mod cholesky;
+pub mod contact;
 pub(crate) mod crew;
 pub(crate) mod etree;
 pub(crate) mod integrators;
 pub(crate) mod kernels;
 pub mod method;
+pub mod obstacle;
 pub(crate) mod ordering;
 pub(crate) mod pages;
 pub(crate) mod parallel;
@@ -36,8 +41,10 @@ pub(crate) mod team;
 pub(crate) mod wide;
 pub(crate) mod xpbd;
 
+pub use contact::{ContactSettings, Surroundings};
 pub use integrators::CgSettings;
 pub use method::{Integrator, Iterations};
+pub use obstacle::{Placed, Pose, Shape};
 pub use parallel::{MAX_THREADS, PARALLEL_MIN_SPRINGS, Threads};
 pub use projective::FactorOrder;
 pub use stability::StabilityEstimate;

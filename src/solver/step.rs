@@ -30,6 +30,12 @@
 //! 5. **Advance** ([`advance`]): x += dt u (u = v for symplectic and implicit Euler and
 //!    projective dynamics, the start-of-step v for explicit Euler, the drift for the others),
 //!    and a check that everything stayed finite.
+//! 6. **Collide** ([`collide`]): only when the scene has obstacles or contact settings. Each
+//!    free particle that ended the step within its radius of an obstacle (or of the ground,
+//!    when contact is set: the ground then leaves pass 4) is put back on the surface, after a
+//!    swept test of its path so that it cannot pass through a thin one, and its velocity
+//!    relative to the surface loses its approach (keeping the restitution's share) and up to
+//!    μ times that of its sliding ([`super::contact`]).
 //!
 //! By default the Bevy layer runs passes 2 (the Euler kick only: the other methods' solves run
 //! before) to 5 as one sweep over the particles ([`sweep`]), assembled from the passes in use,
@@ -38,6 +44,7 @@
 //! Every function here takes the packed [`State`], the per-method buffers ([`Workspace`]) and
 //! the thread pool ([`Threads`]); none knows who owns the particles.
 
+use super::contact::{self, Surroundings};
 use super::integrators::{self, CgSettings, Scratch};
 use super::kernels;
 use super::method::{Integrator, Iterations};
@@ -158,12 +165,19 @@ pub fn forces(s: &mut State, w: &mut Workspace, gravity: DVec2, threads: &Thread
     s.f = f;
 }
 
+/// Keeps the start-of-step velocity as the drift: explicit Euler's position update moves with
+/// it. The separate kick does this; the fused sweep needs it only for the contact pass, which
+/// reads the path the step took.
+pub fn keep_start_velocity(s: &mut State) {
+    s.drift_buffer();
+    s.drift.copy_from_slice(&s.v);
+}
+
 /// Pass 2 for the Euler methods: v += dt f/m; explicit Euler first keeps the start-of-step
 /// velocity as the drift.
 pub fn kick(s: &mut State, integrator: Integrator, dt: f64, threads: &Threads) {
     if integrator == Integrator::ExplicitEuler {
-        s.drift_buffer();
-        s.drift.copy_from_slice(&s.v);
+        keep_start_velocity(s);
     }
     let data = (&mut s.v[..], &s.f[..], &s.inv_mass[..]);
     threads.each(s.springs.len(), data, |(v, f, w)| {
@@ -263,6 +277,31 @@ pub fn advance(s: &mut State, integrator: Integrator, dt: f64, threads: &Threads
         |a, b| a & b,
     );
     s.non_finite = !finite;
+}
+
+/// Pass 6: contact with the obstacles, and with the ground when contact is set
+/// ([`super::contact`]), on where the step ended. Returns the contacts it resolved.
+pub fn collide(
+    s: &mut State,
+    integrator: Integrator,
+    dt: f64,
+    gravity: DVec2,
+    around: &Surroundings,
+    threads: &Threads,
+) -> usize {
+    let u = contact::moves_with_drift(motion(integrator)).then_some(&s.drift[..]);
+    let springs = s.springs.len();
+    contact::collide(
+        &mut s.x,
+        &mut s.v,
+        u,
+        &s.inv_mass,
+        dt,
+        gravity,
+        around,
+        threads,
+        springs,
+    )
 }
 
 /// Passes 2 (the Euler kick only: the other methods' solves run before) to 5 as one sweep over

@@ -2,12 +2,12 @@
 //!
 //! All springs are one mesh and all dots another, rebuilt from the solver's arrays when they
 //! change: two draw calls whatever the scene's size. (One entity or gizmo line per spring cost
-//! ~400 ms a frame at 64×64; see the README's performance section.)
+//! ~400 ms a frame at 64×64; see `docs/app.md`.)
 //! Positions are f64 in the simulation; f32 only here.
 
 use super::pointer::Gesture;
 use super::view::CanvasView;
-use crate::sim::{Attraction, SimParams, Solver, SolverIndex};
+use crate::sim::{Attraction, Obstacles, SimParams, Solver, SolverIndex};
 use bevy::asset::RenderAssetUsages;
 use bevy::camera::visibility::NoFrustumCulling;
 use bevy::mesh::{Indices, PrimitiveTopology, VertexAttributeValues};
@@ -20,6 +20,7 @@ const PARTICLE: Color = Color::srgb(0.95, 0.95, 0.95);
 const PINNED: Color = Color::srgb(1.0, 0.75, 0.2);
 const HELD: Color = Color::srgb(0.35, 0.85, 1.0);
 const ATTRACTION: Color = Color::srgba(0.35, 0.85, 1.0, 0.8);
+const OBSTACLE: Color = Color::srgb(0.55, 0.75, 0.45);
 /// Particle dot radius, in logical pixels.
 const DOT_PX: f32 = 3.5;
 /// Half the width of a spring line, in logical pixels.
@@ -247,6 +248,40 @@ fn strain_color(t: f32) -> Color {
             0.85 * (1.0 - t) + 0.55 * t,
             0.85,
         )
+    }
+}
+
+/// The obstacles' outlines, at the poses the last tick left them (a few gizmo lines each).
+pub fn draw_obstacles(mut gizmos: Gizmos, obstacles: Res<Obstacles>) {
+    use crate::solver::Shape;
+    for o in obstacles.placed() {
+        let (c, angle) = (o.pose.center.as_vec2(), o.pose.angle as f32);
+        match o.shape {
+            Shape::Circle { radius } => {
+                gizmos.circle_2d(Isometry2d::from_translation(c), radius as f32, OBSTACLE);
+            }
+            Shape::Box { half } => {
+                gizmos.rect_2d(
+                    Isometry2d::new(c, Rot2::radians(angle)),
+                    2.0 * half.as_vec2(),
+                    OBSTACLE,
+                );
+            }
+            Shape::Segment { a, b, thickness } => {
+                let turn = Rot2::radians(angle);
+                let (a, b) = (c + turn * a.as_vec2(), c + turn * b.as_vec2());
+                if thickness > 0.0 {
+                    let r = thickness as f32;
+                    let side = (b - a).normalize_or_zero().perp() * r;
+                    gizmos.line_2d(a + side, b + side, OBSTACLE);
+                    gizmos.line_2d(a - side, b - side, OBSTACLE);
+                    gizmos.circle_2d(Isometry2d::from_translation(a), r, OBSTACLE);
+                    gizmos.circle_2d(Isometry2d::from_translation(b), r, OBSTACLE);
+                } else {
+                    gizmos.line_2d(a, b, OBSTACLE);
+                }
+            }
+        }
     }
 }
 

@@ -107,6 +107,7 @@ impl Plugin for AppPlugin {
                     pace::pace_frames,
                     draw::update_batches.after(pointer::drag),
                     draw::draw_frame.after(pointer::attract),
+                    draw::draw_obstacles,
                 ),
             );
     }

@@ -34,6 +34,8 @@ pub struct PanelState {
     /// hanging at rest strains its top springs by 40-50 % (`hooke run --scene cloth32 --tear
     /// 0.4` tears 4 springs in 3 s, 0.5 none), so it holds until pulled.
     tear: f64,
+    /// The contact settings applied when contact is switched on (friction 0.5, points).
+    contact: ContactSettings,
 }
 
 impl Default for PanelState {
@@ -41,6 +43,10 @@ impl Default for PanelState {
         PanelState {
             stiffness: DEFAULT_STIFFNESS,
             tear: 0.6,
+            contact: ContactSettings {
+                friction: 0.5,
+                ..ContactSettings::default()
+            },
         }
     }
 }
@@ -60,6 +66,8 @@ fn edit_label(old: &SimParams, new: &SimParams) -> Option<&'static str> {
         Some("ground")
     } else if old.tear != new.tear {
         Some("tearing")
+    } else if old.contact != new.contact {
+        Some("contact")
     } else if old.gravity != new.gravity {
         Some("gravity")
     } else if old.iterations != new.iterations {
@@ -277,6 +285,44 @@ pub fn side_panel(
                 if ui.checkbox(&mut ground, "y = 0").changed() {
                     p.ground = ground.then_some(0.0);
                 }
+                ui.end_row();
+
+                ui.label("Contact");
+                ui.horizontal(|ui| {
+                    let mut on = p.contact.is_some();
+                    if ui
+                        .checkbox(&mut on, "")
+                        .on_hover_text("friction and restitution at the ground and the obstacles")
+                        .changed()
+                    {
+                        p.contact = on.then_some(state.contact);
+                    }
+                    let c = p.contact.as_mut().unwrap_or(&mut state.contact);
+                    let mut changed = false;
+                    ui.add_enabled_ui(on, |ui| {
+                        let mu = egui::DragValue::new(&mut c.friction)
+                            .range(0.0..=2.0)
+                            .clamp_existing_to_range(false)
+                            .speed(0.01)
+                            .prefix("μ ");
+                        changed |= ui.add(mu).on_hover_text("Coulomb friction").changed();
+                        let e = egui::DragValue::new(&mut c.restitution)
+                            .range(0.0..=1.0)
+                            .speed(0.01)
+                            .prefix("e ");
+                        changed |= ui.add(e).on_hover_text("restitution").changed();
+                        let r = egui::DragValue::new(&mut c.radius)
+                            .range(0.0..=0.1)
+                            .clamp_existing_to_range(false)
+                            .speed(0.0005)
+                            .max_decimals(3)
+                            .prefix("r ");
+                        changed |= ui.add(r).on_hover_text("particle radius, m").changed();
+                    });
+                    if changed && let Some(c) = p.contact {
+                        state.contact = c;
+                    }
+                });
                 ui.end_row();
 
                 ui.label("Tearing");

@@ -1,0 +1,124 @@
+//! Parse errors in words a scene's author can act on: an unknown field or variant is named with
+//! the names it could have meant.
+//!
+//! Every struct of the format denies unknown fields (`#[serde(deny_unknown_fields)]`), because
+//! a misspelled optional field that is silently ignored runs a different scene from the one
+//! written: `(pos: (0.5, 0.5), masss: 5.0)` would weigh 1 kg. RON reports such a field with the
+//! list of the names it expected; this module picks the near ones out of that list.
+
+/// The message for a RON error: ron's own words, except for an unknown field or variant, which
+/// is named with its place in the scene, the near names, and every name allowed there.
+pub(crate) fn message(code: &ron::Error) -> String {
+    match code {
+        ron::Error::NoSuchStructField {
+            expected,
+            found,
+            outer,
+        } => unknown("field", found, expected, outer.as_deref()),
+        ron::Error::NoSuchEnumVariant {
+            expected,
+            found,
+            outer,
+        } => unknown("variant", found, expected, outer.as_deref()),
+        other => other.to_string(),
+    }
+}
+
+fn unknown(kind: &str, found: &str, expected: &[&str], outer: Option<&str>) -> String {
+    let place = outer.map(place).unwrap_or_default();
+    let mut text = format!("unknown {kind} `{found}`{place}");
+    let near = near_names(found, expected);
+    if !near.is_empty() {
+        let listed: Vec<String> = near.iter().map(|n| format!("`{n}`")).collect();
+        text += &format!("; did you mean {}?", listed.join(" or "));
+    }
+    if !expected.is_empty() {
+        text += &format!(" (expected one of: {})", expected.join(", "));
+    }
+    text
+}
+
+/// Where in the scene a struct or enum of the format sits, in the file's own words.
+fn place(outer: &str) -> String {
+    let name = match outer {
+        "Scene" => "the scene",
+        "ParticleDef" => "a particle",
+        "SpringDef" => "a spring",
+        "ClickRules" => "`click`",
+        "Iterations" => "`iterations`",
+        "Generator" => "`generate`",
+        "Integrator" => "`integrator`",
+        "Pin" => "`pin`",
+        "ObstacleDef" => "`obstacles`",
+        "ContactSettings" => "`contact`",
+        // The variants of the format's enums, named by the list they stand in.
+        "Grid" | "Chain" => return format!(" in a `{outer}` of `generate`"),
+        "Circle" | "Box" | "Segment" => return format!(" in a `{outer}` of `obstacles`"),
+        other => return format!(" in `{other}`"),
+    };
+    format!(" in {name}")
+}
+
+/// The names within a small edit distance of `found`, nearest first: one edit for names of up
+/// to four letters, two for longer ones (a swap of neighbours counts as one edit, as in `taer`).
+pub(crate) fn near_names<'a>(found: &str, names: &[&'a str]) -> Vec<&'a str> {
+    let limit = if found.chars().count() <= 4 { 1 } else { 2 };
+    let found = found.to_lowercase();
+    let mut near: Vec<(usize, &str)> = names
+        .iter()
+        .map(|&name| (edit_distance(&found, &name.to_lowercase()), name))
+        .filter(|&(d, _)| d <= limit)
+        .collect();
+    near.sort_by_key(|&(d, _)| d);
+    near.into_iter().map(|(_, name)| name).collect()
+}
+
+/// The optimal string alignment distance: insertions, deletions, substitutions and swaps of
+/// two neighbouring characters, each one edit.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let a: Vec<char> = a.chars().collect();
+    let b: Vec<char> = b.chars().collect();
+    let mut d = vec![vec![0usize; b.len() + 1]; a.len() + 1];
+    for (i, row) in d.iter_mut().enumerate() {
+        row[0] = i;
+    }
+    for (j, cell) in d[0].iter_mut().enumerate() {
+        *cell = j;
+    }
+    for i in 1..=a.len() {
+        for j in 1..=b.len() {
+            let cost = usize::from(a[i - 1] != b[j - 1]);
+            let mut best = (d[i - 1][j] + 1)
+                .min(d[i][j - 1] + 1)
+                .min(d[i - 1][j - 1] + cost);
+            if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
+                best = best.min(d[i - 2][j - 2] + 1);
+            }
+            d[i][j] = best;
+        }
+    }
+    d[a.len()][b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn near_names_catch_the_usual_typos() {
+        let particle = ["pos", "vel", "mass", "pinned"];
+        assert_eq!(near_names("masss", &particle), ["mass"]);
+        assert_eq!(near_names("pined", &particle), ["pinned"]);
+        assert_eq!(near_names("Pos", &particle), ["pos"]);
+        assert_eq!(near_names("taer", &["tear", "dt", "ground"]), ["tear"]);
+        assert_eq!(near_names("colour", &particle), Vec::<&str>::new());
+    }
+
+    #[test]
+    fn distance_counts_a_swap_as_one_edit() {
+        assert_eq!(edit_distance("taer", "tear"), 1);
+        assert_eq!(edit_distance("", "abc"), 3);
+        assert_eq!(edit_distance("stifness", "stiffness"), 1);
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+    }
+}

@@ -1,0 +1,123 @@
+//! Obstacles as entities: a shape ([`Obstacle`]), where it is ([`ObstaclePose`]) and how it
+//! moves ([`ObstacleVelocity`]). The step collides every particle with them
+//! ([`crate::solver::contact`]).
+//!
+//! An obstacle is kinematic, as a kinematic rigid body is in avian: the step moves it by its
+//! velocity and nothing pushes it, so a user system that sets the velocity (a rotating
+//! paddle, a moving platform) moves it, and what rests on it feels that motion through
+//! friction. Its pose is written back after every tick. The three components are plain f64
+//! data, so an adapter could copy a rigid body's pose and velocity into them each tick, and
+//! read the contacts back, without this crate knowing the rigid-body engine.
+
+use super::components::CreationOrder;
+use crate::solver::{Placed, Pose, Shape};
+use bevy::math::DVec2;
+use bevy::prelude::*;
+
+/// An obstacle's shape, in its own frame (centred on [`ObstaclePose::center`], unrotated).
+///
+/// ```
+/// # use bevy::math::DVec2;
+/// # use hooke::sim::{Obstacle, ObstaclePose, ObstacleVelocity};
+/// # use hooke::solver::Shape;
+/// let mut app = hooke::headless_app();
+/// // A disc of radius 0.1 m at (0.5, 0.3), turning at one radian a second.
+/// app.world_mut().spawn((
+///     Obstacle(Shape::Circle { radius: 0.1 }),
+///     ObstaclePose { center: DVec2::new(0.5, 0.3), angle: 0.0 },
+///     ObstacleVelocity { linear: DVec2::ZERO, angular: 1.0 },
+/// ));
+/// ```
+#[derive(Component, Debug, Clone, Copy, PartialEq)]
+#[require(ObstaclePose, ObstacleVelocity, CreationOrder)]
+#[component(on_add = super::components::assign_creation_order)]
+pub struct Obstacle(pub Shape);
+
+/// Where an obstacle is: its centre (m) and its rotation (rad, counter-clockwise).
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+pub struct ObstaclePose {
+    /// Its centre, m.
+    pub center: DVec2,
+    /// Its rotation, rad.
+    pub angle: f64,
+}
+
+/// How an obstacle moves: the step advances its pose by these (m/s, rad/s).
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+pub struct ObstacleVelocity {
+    /// Its centre's velocity, m/s.
+    pub linear: DVec2,
+    /// Its angular velocity, rad/s.
+    pub angular: f64,
+}
+
+/// The obstacles as the step reads them, gathered at the start of every tick in the order they
+/// were made ([`CreationOrder`], as particles are: a scene's order survives a save),
+/// and how many contacts the last step resolved.
+#[derive(Resource, Debug, Default)]
+pub struct Obstacles {
+    pub(crate) placed: Vec<Placed>,
+    pub(crate) entities: Vec<Entity>,
+    /// Particle–surface contacts (ground and obstacles) resolved in the last step.
+    pub contacts: usize,
+}
+
+impl Obstacles {
+    /// The obstacles at their current poses.
+    pub fn placed(&self) -> &[Placed] {
+        &self.placed
+    }
+
+    /// The entity of each, in the same order.
+    pub fn entities(&self) -> &[Entity] {
+        &self.entities
+    }
+}
+
+/// Gathers the obstacles for this tick's steps (a handful of entities: read them all).
+pub(crate) fn gather_obstacles(
+    mut obstacles: ResMut<Obstacles>,
+    query: Query<(
+        Entity,
+        &CreationOrder,
+        &Obstacle,
+        &ObstaclePose,
+        &ObstacleVelocity,
+    )>,
+) {
+    let mut all: Vec<_> = query.iter().collect();
+    all.sort_by_key(|(e, order, ..)| (**order, *e));
+    if all.is_empty() && obstacles.placed.is_empty() {
+        return;
+    }
+    let o = obstacles.bypass_change_detection();
+    o.placed.clear();
+    o.entities.clear();
+    for (e, _, shape, pose, vel) in all {
+        o.entities.push(e);
+        o.placed.push(Placed {
+            shape: shape.0,
+            pose: Pose {
+                center: pose.center,
+                angle: pose.angle,
+                velocity: vel.linear,
+                angular_velocity: vel.angular,
+            },
+        });
+    }
+}
+
+/// Writes the poses the steps moved back to the moving obstacles.
+pub(crate) fn write_back_obstacles(
+    obstacles: Res<Obstacles>,
+    mut poses: Query<(&mut ObstaclePose, &ObstacleVelocity)>,
+) {
+    for (e, placed) in obstacles.entities.iter().zip(&obstacles.placed) {
+        if let Ok((mut pose, vel)) = poses.get_mut(*e)
+            && (vel.linear != DVec2::ZERO || vel.angular != 0.0)
+        {
+            pose.center = placed.pose.center;
+            pose.angle = placed.pose.angle;
+        }
+    }
+}

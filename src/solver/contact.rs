@@ -1,0 +1,242 @@
+//! The contact pass: after the position update, each free particle is kept out of the
+//! obstacles (and, when contact is set, out of the ground by its radius), and its velocity
+//! relative to the surface it touches loses its approach (keeping the restitution's share)
+//! and up to μ times that in sliding (Coulomb friction).
+//!
+//! Why after the step, for every integrator: each method's update stays what it was, and the
+//! contact sees where the step ends, so a large step cannot end inside an obstacle. A fast
+//! particle cannot cross a thin obstacle within a step either: its path from where the step
+//! began (x₁ − dt·u, u the velocity it moved with) to where it ends is tested against each
+//! obstacle, and it stops where it first touches ([`super::obstacle::Placed::first_hit`]).
+//!
+//! Why the velocity rule keeps energy from rising: the normal part of the relative velocity
+//! only shrinks in size (|e·vₙ| ≤ |vₙ| with e ≤ 1), the tangential part only shrinks, and the
+//! position moves only back toward the surface, by at most the step's own travel into it.
+
+use super::obstacle::{Placed, Surface, respond};
+use super::parallel::Threads;
+use super::sweep::Motion;
+use glam::DVec2;
+
+/// Contact settings: the particles' radius, and the surfaces' friction and restitution, at
+/// every contact (the ground's, the obstacles', and between particles).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSettings {
+    /// Every particle's collision radius, m (0: points).
+    #[serde(default)]
+    pub radius: f64,
+    /// Coulomb coefficient μ.
+    #[serde(default)]
+    pub friction: f64,
+    /// The share of the normal approach speed kept after an impact, 0..=1.
+    #[serde(default)]
+    pub restitution: f64,
+    /// Particles collide with each other. Not yet supported: the check of the inputs refuses it.
+    #[serde(default)]
+    pub particles: bool,
+}
+
+impl Default for ContactSettings {
+    fn default() -> Self {
+        ContactSettings {
+            radius: 0.0,
+            friction: 0.0,
+            restitution: 0.0,
+            particles: false,
+        }
+    }
+}
+
+impl ContactSettings {
+    /// What is wrong with the settings, as (field, value, rule), if anything.
+    pub fn problem(&self) -> Option<(&'static str, f64, &'static str)> {
+        let non_negative = |v: f64| v.is_finite() && v >= 0.0;
+        if !non_negative(self.radius) {
+            return Some(("radius", self.radius, "must be finite and >= 0"));
+        }
+        if !non_negative(self.friction) {
+            return Some(("friction", self.friction, "must be finite and >= 0"));
+        }
+        if !(non_negative(self.restitution) && self.restitution <= 1.0) {
+            return Some(("restitution", self.restitution, "must be between 0 and 1"));
+        }
+        if self.particles {
+            return Some((
+                "particles",
+                1.0,
+                "collisions between particles are not supported yet; set it to false",
+            ));
+        }
+        None
+    }
+}
+
+/// What the contact pass works against: the obstacles, the ground, and the settings (`None`:
+/// particles are points, the ground is the step's own frictionless clamp and not this pass's,
+/// and obstacles are frictionless and keep nothing of an impact).
+#[derive(Debug, Clone, Copy)]
+pub struct Surroundings<'a> {
+    /// The obstacles at their poses.
+    pub obstacles: &'a [Placed],
+    /// The ground's height, when the scene has one.
+    pub ground: Option<f64>,
+    /// The contact settings.
+    pub settings: Option<ContactSettings>,
+}
+
+impl Surroundings<'_> {
+    /// Whether the pass has anything to do.
+    pub fn active(&self) -> bool {
+        !self.obstacles.is_empty() || (self.settings.is_some() && self.ground.is_some())
+    }
+
+    /// The ground this pass handles: only when contact is set (else the step's own clamp does).
+    fn ground(&self) -> Option<f64> {
+        self.settings.and(self.ground)
+    }
+
+    fn radius(&self) -> f64 {
+        self.settings.map_or(0.0, |s| s.radius)
+    }
+
+    fn surface(&self, dt: f64, gravity: DVec2) -> Surface {
+        let s = self.settings.unwrap_or_default();
+        Surface {
+            friction: s.friction,
+            restitution: s.restitution,
+            // A resting particle approaches at one step of gravity; twice that keeps it at rest.
+            rest_speed: 2.0 * gravity.length() * dt,
+        }
+    }
+}
+
+/// The contact pass over the particles `x`, `v` (after the position update), with `u` the
+/// velocity each moved with over the step (`v` itself for the methods that move with their end
+/// velocity) and `w` their inverse masses (0: pinned or held, left alone). Returns how many
+/// particle–surface contacts it resolved.
+#[allow(clippy::too_many_arguments)]
+pub fn collide(
+    x: &mut [DVec2],
+    v: &mut [DVec2],
+    u: Option<&[DVec2]>,
+    w: &[f64],
+    dt: f64,
+    gravity: DVec2,
+    around: &Surroundings,
+    threads: &Threads,
+    springs: usize,
+) -> usize {
+    let (r, ground, surface) = (
+        around.radius(),
+        around.ground(),
+        around.surface(dt, gravity),
+    );
+    let obstacles = around.obstacles;
+    let one = |x: &mut DVec2, v: &mut DVec2, u: DVec2, w: f64| -> usize {
+        if w == 0.0 {
+            return 0;
+        }
+        let mut contacts = 0;
+        // Where the step began; a path that crosses into an obstacle stops where it first
+        // touches and slides on along the surface for the rest of the step.
+        let from = *x - u * dt;
+        // Where the particle was going (its velocity, for a step that did not move it): a
+        // particle on a thin segment's line belongs on the side it is not heading to.
+        let heading = if *x != from { *x - from } else { *v };
+        let first = obstacles
+            .iter()
+            .enumerate()
+            .filter_map(|(i, o)| o.first_hit(from, *x, r).map(|t| (t, i)))
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        if let Some((t, i)) = first {
+            let o = &obstacles[i];
+            let step = *x - from;
+            let hit = from + step * t;
+            let n = o.hit_normal(hit, heading);
+            let rest = step * (1.0 - t);
+            let into = (-rest.dot(n)).max(0.0);
+            *x = hit + rest + n * into;
+            let surface_velocity = o.velocity_at(*x);
+            hold(x, from, surface_velocity * dt, n, into, surface.friction);
+            *v = respond(*v, surface_velocity, n, surface);
+            contacts += 1;
+        }
+        for o in obstacles {
+            if let Some(touch) = o.touch(*x, from, heading, r) {
+                *x += touch.normal * touch.depth;
+                let surface_velocity = o.velocity_at(*x);
+                hold(
+                    x,
+                    from,
+                    surface_velocity * dt,
+                    touch.normal,
+                    touch.depth,
+                    surface.friction,
+                );
+                *v = respond(*v, surface_velocity, touch.normal, surface);
+                contacts += 1;
+            }
+        }
+        if let Some(g) = ground
+            && x.y < g + r
+        {
+            let depth = g + r - x.y;
+            x.y = g + r;
+            hold(x, from, DVec2::ZERO, DVec2::Y, depth, surface.friction);
+            *v = respond(*v, DVec2::ZERO, DVec2::Y, surface);
+            contacts += 1;
+        }
+        contacts
+    };
+    match u {
+        Some(u) => threads.chunked(
+            springs,
+            (&mut x[..], &mut v[..], u, w),
+            |(x, v, u, w)| {
+                let mut n = 0;
+                for i in 0..x.len() {
+                    n += one(&mut x[i], &mut v[i], u[i], w[i]);
+                }
+                n
+            },
+            |a, b| a + b,
+        ),
+        None => threads.chunked(
+            springs,
+            (&mut x[..], &mut v[..], w),
+            |(x, v, w)| {
+                let mut n = 0;
+                for i in 0..x.len() {
+                    let vi = v[i];
+                    n += one(&mut x[i], &mut v[i], vi, w[i]);
+                }
+                n
+            },
+            |a, b| a + b,
+        ),
+    }
+}
+
+/// Friction on the step's displacement: the particle's sliding over the step, relative to the
+/// surface (which moved by `surface_shift`), is taken back by at most μ times the depth the
+/// contact pushed it out by, all of it when that is enough (static friction). Without this a
+/// particle held by friction would still creep down a slope by g·sinθ·dt² a step: the
+/// velocity rule stops its motion, but only after the step has moved it.
+fn hold(x: &mut DVec2, from: DVec2, surface_shift: DVec2, n: DVec2, depth: f64, friction: f64) {
+    let moved = *x - from - surface_shift;
+    let sliding = moved - n * moved.dot(n);
+    let (length, limit) = (sliding.length(), friction * depth);
+    if length <= limit {
+        *x -= sliding;
+    } else if length > 0.0 {
+        *x -= sliding * (limit / length);
+    }
+}
+
+/// Whether the step's path is read from the drift buffer (explicit Euler: the start-of-step
+/// velocity; velocity Verlet, RK4, XPBD: the velocity the position update used), or from the
+/// end velocity (symplectic and implicit Euler, projective dynamics, which move with it).
+pub fn moves_with_drift(motion: Motion) -> bool {
+    matches!(motion, Motion::ExplicitEuler | Motion::Drift)
+}

@@ -1,0 +1,523 @@
+//! Obstacles: static or moving shapes that particles collide with, and the response of one
+//! particle to one of them (Coulomb friction and restitution on the velocity relative to the
+//! obstacle's surface).
+//!
+//! A shape is written in the obstacle's own frame and placed by a pose (its centre and angle);
+//! the pose's velocities are what a particle in contact feels through friction. A particle of
+//! radius r is in contact when its centre is within r of the shape, so a shape is tested as if
+//! inflated by r: a circle of radius R as one of R + r, a segment of thickness t as a capsule of
+//! radius t + r, a box by its distance plus r.
+
+use glam::DVec2;
+
+/// A shape in its obstacle's frame (its centre at the origin, unrotated).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Shape {
+    /// A disc.
+    Circle {
+        /// Its radius, m.
+        radius: f64,
+    },
+    /// A rectangle of half-extents `half` along the frame's axes.
+    Box {
+        /// Half its width and height, m.
+        half: DVec2,
+    },
+    /// A segment from `a` to `b`, a capsule of radius `thickness` when that is > 0.
+    Segment {
+        /// One end, in the obstacle's frame.
+        a: DVec2,
+        /// The other end.
+        b: DVec2,
+        /// The capsule's radius, m (0: a line a particle cannot cross).
+        thickness: f64,
+    },
+}
+
+/// Where an obstacle is and how it moves.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Pose {
+    /// Its centre, m.
+    pub center: DVec2,
+    /// Its rotation, rad (counter-clockwise).
+    pub angle: f64,
+    /// Its centre's velocity, m/s.
+    pub velocity: DVec2,
+    /// Its angular velocity, rad/s.
+    pub angular_velocity: f64,
+}
+
+/// A shape at a pose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placed {
+    /// The shape.
+    pub shape: Shape,
+    /// Its pose.
+    pub pose: Pose,
+}
+
+/// A particle's contact with an obstacle: how deep it is (the radius included) and the
+/// surface's outward normal at the nearest point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Touch {
+    /// Penetration depth, m (> 0 in contact).
+    pub depth: f64,
+    /// Outward unit normal.
+    pub normal: DVec2,
+}
+
+/// The least thickness a segment collides with, m. A zero-thickness segment is a line, and a
+/// point resting on it sits on it to round-off, on one side or the other of it by 1e-17 m:
+/// which side it is on would be a coin toss. A millionth of a metre of thickness, invisible at
+/// any zoom the app allows, gives it an inside, so that its normal and the side a particle is
+/// on are never in doubt.
+pub const MIN_THICKNESS: f64 = 1e-6;
+
+impl Shape {
+    /// The shape as contact sees it: a segment at least [`MIN_THICKNESS`] thick.
+    fn for_contact(self) -> Shape {
+        match self {
+            Shape::Segment { a, b, thickness } => Shape::Segment {
+                a,
+                b,
+                thickness: thickness.max(MIN_THICKNESS),
+            },
+            other => other,
+        }
+    }
+}
+
+impl Placed {
+    /// A shape standing still at `center`, turned by `angle`.
+    pub fn at(shape: Shape, center: DVec2, angle: f64) -> Placed {
+        Placed {
+            shape,
+            pose: Pose {
+                center,
+                angle,
+                ..Pose::default()
+            },
+        }
+    }
+
+    /// The point `p` (world) in the obstacle's frame.
+    fn local(&self, p: DVec2) -> DVec2 {
+        DVec2::from_angle(-self.pose.angle).rotate(p - self.pose.center)
+    }
+
+    /// A direction in the obstacle's frame, in the world.
+    fn world_direction(&self, d: DVec2) -> DVec2 {
+        DVec2::from_angle(self.pose.angle).rotate(d)
+    }
+
+    /// The signed distance from `p` to the shape's surface (negative inside) and the outward
+    /// normal at the nearest surface point.
+    pub fn distance(&self, p: DVec2) -> (f64, DVec2) {
+        let q = self.local(p);
+        let (d, n) = match self.shape.for_contact() {
+            Shape::Circle { radius } => {
+                let l = q.length();
+                let n = if l > 0.0 { q / l } else { DVec2::Y };
+                (l - radius, n)
+            }
+            Shape::Box { half } => box_distance(q, half),
+            Shape::Segment { a, b, thickness } => {
+                let ab = b - a;
+                let len2 = ab.length_squared();
+                let t = if len2 > 0.0 {
+                    ((q - a).dot(ab) / len2).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                let d = q - (a + ab * t);
+                let l = d.length();
+                // On the line itself, to round-off (a nanometre, a thousandth of the least
+                // thickness), the direction from it is noise: take the line's left normal, and
+                // let the caller pick the side ([`Self::touch`], [`Self::hit_normal`]).
+                let n = if l > 1e-9 {
+                    d / l
+                } else {
+                    let perp = ab.perp();
+                    if perp.length_squared() > 0.0 {
+                        perp.normalize()
+                    } else {
+                        DVec2::Y
+                    }
+                };
+                (l - thickness, n)
+            }
+        };
+        (d, self.world_direction(n))
+    }
+
+    /// The contact of a particle of radius `r` at `p`, if it is within `r` of the surface.
+    /// `from` is where it came from and `heading` where it is going: a particle that crossed a
+    /// segment's line within the step is put back on the side it came from, not pushed on
+    /// through, and one that sits on the line itself (to round-off, with no side of its own) is
+    /// put on the side it is not heading to.
+    pub fn touch(&self, p: DVec2, from: DVec2, heading: DVec2, r: f64) -> Option<Touch> {
+        let (d, mut normal) = self.distance(p);
+        if d >= r {
+            return None;
+        }
+        let mut depth = r - d;
+        if let Shape::Segment { thickness, .. } = self.shape.for_contact() {
+            // The point of the line nearest p, and the sides of it p and `from` are on.
+            let core = p - normal * (d + thickness);
+            let (side_from, off_line) = ((from - core).dot(normal), (p - core).length());
+            let flip = if side_from.abs() > 0.5 * MIN_THICKNESS {
+                side_from < 0.0
+            } else {
+                off_line < 0.5 * MIN_THICKNESS && heading.dot(normal) > 0.0
+            };
+            if flip {
+                normal = -normal;
+                depth = r + 2.0 * thickness + d;
+            }
+        }
+        Some(Touch { depth, normal })
+    }
+
+    /// The outward normal where a path moving by `step` first touched the shape at `p`: the
+    /// surface's normal there, turned to face the path (a particle exactly on a line has no
+    /// side of its own; it is on the side it came from).
+    pub fn hit_normal(&self, p: DVec2, step: DVec2) -> DVec2 {
+        let (_, n) = self.distance(p);
+        if n.dot(step) > 0.0 { -n } else { n }
+    }
+
+    /// Moves the obstacle by its velocities over `dt` (a kinematic body: nothing pushes it).
+    pub fn advance(&mut self, dt: f64) {
+        self.pose.center += self.pose.velocity * dt;
+        self.pose.angle += self.pose.angular_velocity * dt;
+    }
+
+    /// What is wrong with the shape or pose, as (what, value), if anything: a radius,
+    /// half-extent or thickness that is not finite and positive (a thickness may be 0), a
+    /// segment of zero length, or a non-finite pose.
+    pub fn problem(&self) -> Option<(&'static str, f64)> {
+        let p = &self.pose;
+        for (what, v) in [
+            ("center.x", p.center.x),
+            ("center.y", p.center.y),
+            ("angle", p.angle),
+            ("velocity.x", p.velocity.x),
+            ("velocity.y", p.velocity.y),
+            ("angular velocity", p.angular_velocity),
+        ] {
+            if !v.is_finite() {
+                return Some((what, v));
+            }
+        }
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        match self.shape {
+            Shape::Circle { radius } if !positive(radius) => Some(("radius", radius)),
+            Shape::Box { half } if !positive(half.x) => Some(("half.x", half.x)),
+            Shape::Box { half } if !positive(half.y) => Some(("half.y", half.y)),
+            Shape::Segment { a, b, thickness } => {
+                if !(thickness.is_finite() && thickness >= 0.0) {
+                    Some(("thickness", thickness))
+                } else if !(a.is_finite() && b.is_finite()) {
+                    Some(("end", f64::NAN))
+                } else if a == b {
+                    Some(("length", 0.0))
+                } else {
+                    None
+                }
+            }
+            _ => None,
+        }
+    }
+
+    /// The velocity of the obstacle's material at the world point `p`.
+    pub fn velocity_at(&self, p: DVec2) -> DVec2 {
+        let arm = p - self.pose.center;
+        self.pose.velocity + self.pose.angular_velocity * arm.perp()
+    }
+
+    /// The first fraction t in [0, 1] of the path `from` → `to` at which a particle of radius
+    /// `r` touches the shape, for a path that starts outside it; `None` when the path stays
+    /// clear or starts in contact (except for a path that crosses a segment's line). The
+    /// shape is taken at its pose (its motion over the step is small against a thrown
+    /// particle's). This is what keeps a fast particle from passing through a thin obstacle
+    /// within one step.
+    pub fn first_hit(&self, from: DVec2, to: DVec2, r: f64) -> Option<f64> {
+        let (p0, p1) = (self.local(from), self.local(to));
+        // A start on the surface, to round-off (a particle put there by the last step), is a
+        // start in contact.
+        if self.distance(from).0 < r + 0.5 * MIN_THICKNESS {
+            // Already in contact: only a segment can still be passed through, by crossing its
+            // line (a particle resting on a thin one moves more than its thickness a step).
+            return match self.shape.for_contact() {
+                Shape::Segment { a, b, .. } => line_crossing(p0, p1, a, b),
+                _ => None,
+            };
+        }
+        match self.shape.for_contact() {
+            Shape::Circle { radius } => ray_circle(p0, p1, DVec2::ZERO, radius + r),
+            Shape::Segment { a, b, thickness } => ray_capsule(p0, p1, a, b, thickness + r),
+            Shape::Box { half } => ray_rounded_box(p0, p1, half, r),
+        }
+    }
+}
+
+/// Signed distance to an axis-aligned box centred at the origin, and the outward normal.
+fn box_distance(q: DVec2, half: DVec2) -> (f64, DVec2) {
+    let d = q.abs() - half;
+    let outside = d.max(DVec2::ZERO);
+    if outside.length_squared() > 0.0 {
+        let n = (outside * q.signum()).normalize();
+        (outside.length(), n)
+    } else if d.x > d.y {
+        // Inside: out through the nearer side.
+        (d.x, DVec2::new(q.x.signum(), 0.0))
+    } else {
+        (d.y, DVec2::new(0.0, q.y.signum()))
+    }
+}
+
+/// Where the path p0 → p1 crosses the line of the segment a–b within its length, as a
+/// fraction of the path. A start on the line (within half the least thickness) has no side of
+/// its own: it counts as crossing at once when the path leaves the line, which puts the
+/// particle back on the side it is not heading to.
+fn line_crossing(p0: DVec2, p1: DVec2, a: DVec2, b: DVec2) -> Option<f64> {
+    let ab = b - a;
+    let len = ab.length();
+    if len == 0.0 {
+        return None;
+    }
+    let n = ab.perp() / len;
+    let (s0, s1) = ((p0 - a).dot(n), (p1 - a).dot(n));
+    let on_line = |s: f64| s.abs() < 0.5 * MIN_THICKNESS;
+    let t = if on_line(s0) {
+        if on_line(s1) {
+            return None;
+        }
+        0.0
+    } else if (s0 > 0.0) != (s1 > 0.0) {
+        s0 / (s0 - s1)
+    } else {
+        return None;
+    };
+    let along = (p0 + (p1 - p0) * t - a).dot(ab) / (len * len);
+    (0.0..=1.0).contains(&along).then_some(t)
+}
+
+/// The first t in [0, 1] at which p0 + t (p1 − p0) is within `radius` of `c`.
+fn ray_circle(p0: DVec2, p1: DVec2, c: DVec2, radius: f64) -> Option<f64> {
+    let d = p1 - p0;
+    let m = p0 - c;
+    let a = d.length_squared();
+    if a == 0.0 {
+        return None;
+    }
+    let b = m.dot(d);
+    let cc = m.length_squared() - radius * radius;
+    let disc = b * b - a * cc;
+    if disc < 0.0 {
+        return None;
+    }
+    let t = (-b - disc.sqrt()) / a;
+    (0.0..=1.0).contains(&t).then_some(t)
+}
+
+/// The first t at which the path comes within `radius` of the segment a–b (a capsule).
+fn ray_capsule(p0: DVec2, p1: DVec2, a: DVec2, b: DVec2, radius: f64) -> Option<f64> {
+    let ab = b - a;
+    let mut best: Option<f64> = None;
+    let mut keep = |t: Option<f64>| {
+        if let Some(t) = t {
+            best = Some(best.map_or(t, |b: f64| b.min(t)));
+        }
+    };
+    keep(ray_circle(p0, p1, a, radius));
+    keep(ray_circle(p0, p1, b, radius));
+    let len = ab.length();
+    if len > 0.0 {
+        // The two long sides: lines parallel to ab at ±radius.
+        let n = ab.perp() / len;
+        let d = p1 - p0;
+        for side in [radius, -radius] {
+            let s0 = (p0 - a).dot(n) - side;
+            let s1 = (p1 - a).dot(n) - side;
+            if s0.signum() == s1.signum() || s0 == s1 {
+                continue;
+            }
+            let t = s0 / (s0 - s1);
+            let hit = p0 + d * t;
+            let along = (hit - a).dot(ab) / (len * len);
+            if (0.0..=1.0).contains(&along) && (0.0..=1.0).contains(&t) {
+                keep(Some(t));
+            }
+        }
+    }
+    best
+}
+
+/// The first t at which the path comes within `r` of the box (the box's sides pushed out by r,
+/// its corners rounded by r).
+fn ray_rounded_box(p0: DVec2, p1: DVec2, half: DVec2, r: f64) -> Option<f64> {
+    let corners = [
+        DVec2::new(-half.x, -half.y),
+        DVec2::new(half.x, -half.y),
+        DVec2::new(half.x, half.y),
+        DVec2::new(-half.x, half.y),
+    ];
+    let mut best: Option<f64> = None;
+    for i in 0..4 {
+        let (a, b) = (corners[i], corners[(i + 1) % 4]);
+        if let Some(t) = ray_capsule(p0, p1, a, b, r) {
+            best = Some(best.map_or(t, |x: f64| x.min(t)));
+        }
+    }
+    best
+}
+
+/// The contact's materials: Coulomb friction and restitution.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Surface {
+    /// Coulomb coefficient μ: the tangential velocity change is at most μ times the normal one.
+    pub friction: f64,
+    /// The share of the normal approach speed kept after an impact, 0..=1.
+    pub restitution: f64,
+    /// Below this approach speed an impact keeps nothing (m/s): a resting particle's approach
+    /// is one step of gravity, and bouncing it back would make it jitter for ever.
+    pub rest_speed: f64,
+}
+
+/// The velocity response of a particle in contact: its velocity relative to the surface
+/// (`surface_velocity`) loses its approach along `normal` (and keeps `restitution` of it, above
+/// the rest speed), and its tangential part shrinks by at most `friction` times that normal
+/// change (to zero: static friction). A particle moving away from the surface is left as it is.
+pub fn respond(v: DVec2, surface_velocity: DVec2, normal: DVec2, s: Surface) -> DVec2 {
+    let rel = v - surface_velocity;
+    let vn = rel.dot(normal);
+    if vn >= 0.0 {
+        return v;
+    }
+    let kept = if -vn > s.rest_speed {
+        -vn * s.restitution
+    } else {
+        0.0
+    };
+    let dvn = kept - vn;
+    let vt = rel - normal * vn;
+    let speed_t = vt.length();
+    let vt = if speed_t > s.friction * dvn {
+        vt * (1.0 - s.friction * dvn / speed_t)
+    } else {
+        DVec2::ZERO
+    };
+    surface_velocity + normal * kept + vt
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn at(shape: Shape, center: DVec2, angle: f64) -> Placed {
+        Placed::at(shape, center, angle)
+    }
+
+    #[test]
+    fn distances_and_normals() {
+        let c = at(Shape::Circle { radius: 1.0 }, DVec2::new(1.0, 0.0), 0.0);
+        let (d, n) = c.distance(DVec2::new(3.0, 0.0));
+        assert!((d - 1.0).abs() < 1e-15 && (n - DVec2::X).length() < 1e-15);
+
+        let b = at(
+            Shape::Box {
+                half: DVec2::new(2.0, 1.0),
+            },
+            DVec2::ZERO,
+            std::f64::consts::FRAC_PI_2,
+        );
+        // Rotated a quarter turn, the box is 2 tall: a point 1.5 above its centre is 0.5 inside.
+        let (d, n) = b.distance(DVec2::new(0.0, 1.5));
+        assert!(
+            (d + 0.5).abs() < 1e-12 && (n - DVec2::Y).length() < 1e-12,
+            "{d} {n}"
+        );
+
+        let s = at(
+            Shape::Segment {
+                a: DVec2::new(-1.0, 0.0),
+                b: DVec2::new(1.0, 0.0),
+                thickness: 0.1,
+            },
+            DVec2::ZERO,
+            0.0,
+        );
+        let (d, n) = s.distance(DVec2::new(0.3, -0.5));
+        assert!((d - 0.4).abs() < 1e-12 && (n + DVec2::Y).length() < 1e-12);
+    }
+
+    #[test]
+    fn a_fast_path_through_a_thin_segment_is_caught() {
+        let s = at(
+            Shape::Segment {
+                a: DVec2::new(0.0, 0.4),
+                b: DVec2::new(0.6, 0.2),
+                thickness: 0.0,
+            },
+            DVec2::ZERO,
+            0.0,
+        );
+        // 10 m/s for 1/60 s: 0.17 m, straight through the line.
+        let (from, to) = (DVec2::new(0.3, 0.4), DVec2::new(0.3, 0.4 - 10.0 / 60.0));
+        let t = s.first_hit(from, to, 0.0).expect("crosses");
+        let hit = from + (to - from) * t;
+        assert!(s.distance(hit).0.abs() < 1e-12, "{hit}");
+        assert_eq!(s.first_hit(from, DVec2::new(0.3, 0.35), 0.0), None);
+    }
+
+    #[test]
+    fn friction_stops_slow_sliding_and_slows_fast_sliding() {
+        let s = Surface {
+            friction: 0.5,
+            restitution: 0.0,
+            rest_speed: 0.0,
+        };
+        // Into the floor at 1 m/s: the normal change is 1, so up to 0.5 of sliding goes.
+        let v = respond(DVec2::new(0.3, -1.0), DVec2::ZERO, DVec2::Y, s);
+        assert_eq!(v, DVec2::ZERO);
+        let v = respond(DVec2::new(2.0, -1.0), DVec2::ZERO, DVec2::Y, s);
+        assert!((v - DVec2::new(1.5, 0.0)).length() < 1e-15, "{v}");
+        // Moving away: untouched.
+        assert_eq!(
+            respond(DVec2::new(2.0, 1.0), DVec2::ZERO, DVec2::Y, s),
+            DVec2::new(2.0, 1.0)
+        );
+    }
+
+    #[test]
+    fn restitution_keeps_its_share_above_the_rest_speed() {
+        let s = Surface {
+            friction: 0.0,
+            restitution: 0.5,
+            rest_speed: 0.01,
+        };
+        assert_eq!(
+            respond(DVec2::new(0.0, -2.0), DVec2::ZERO, DVec2::Y, s),
+            DVec2::new(0.0, 1.0)
+        );
+        assert_eq!(
+            respond(DVec2::new(0.0, -0.005), DVec2::ZERO, DVec2::Y, s),
+            DVec2::ZERO
+        );
+    }
+
+    #[test]
+    fn a_moving_surface_carries_a_resting_particle() {
+        let s = Surface {
+            friction: 1.0,
+            restitution: 0.0,
+            rest_speed: 0.0,
+        };
+        // A belt at 0.5 m/s under a particle at rest pressed on it at 0.1 m/s: friction gives
+        // it μ times the normal change, 0.1 m/s, toward the belt's speed.
+        let belt = DVec2::new(0.5, 0.0);
+        let v = respond(DVec2::new(0.0, -0.1), belt, DVec2::Y, s);
+        assert!((v - DVec2::new(0.1, 0.0)).length() < 1e-15, "{v}");
+    }
+}
