@@ -44,16 +44,14 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
         p.push(format!("contact.{field}: {rule}, got {v}"));
     }
     for (i, o) in scene.obstacles.iter().enumerate() {
-        if let Some((what, v)) = o.placed().problem() {
-            let rule = match what {
-                "length" => "a segment needs two different ends".to_string(),
-                "thickness" => format!("must be finite and >= 0, got {v}"),
-                _ if what.starts_with("center") || what == "angle" || what == "end" => {
-                    "must be finite".to_string()
-                }
-                _ => format!("must be finite and > 0, got {v}"),
+        if let Some((what, v, rule)) = o.placed().problem() {
+            // A bound's value is worth showing; a NaN or a zero length is the rule itself.
+            let got = if v.is_finite() && what != "length" {
+                format!(", got {v}")
+            } else {
+                String::new()
             };
-            p.push(format!("obstacles[{i}]: {what}: {rule}"));
+            p.push(format!("obstacles[{i}]: {what}: {rule}{got}"));
         }
     }
     if let Some(c) = &scene.click {

@@ -82,29 +82,17 @@ pub fn check_obstacle(
     pose: &ObstaclePose,
     velocity: &ObstacleVelocity,
 ) -> Option<InputProblem> {
-    let placed = crate::solver::Placed {
-        shape: shape.0,
-        pose: crate::solver::Pose {
-            center: pose.center,
-            angle: pose.angle,
-            velocity: velocity.linear,
-            angular_velocity: velocity.angular,
-        },
-    };
-    let (what, v) = placed.problem()?;
-    let (field, rule) = match what {
-        "center.x" | "center.y" => ("ObstaclePose.center", "must be finite"),
-        "angle" => ("ObstaclePose.angle", "must be finite"),
-        "velocity.x" | "velocity.y" => ("ObstacleVelocity.linear", "must be finite"),
-        "angular velocity" => ("ObstacleVelocity.angular", "must be finite"),
-        "radius" => ("Obstacle: the circle's radius", "must be finite and > 0"),
-        "half.x" | "half.y" => ("Obstacle: the box's half-extents", "must be finite and > 0"),
-        "thickness" => (
-            "Obstacle: the segment's thickness",
-            "must be finite and >= 0",
-        ),
-        "length" => ("Obstacle: the segment", "needs two different ends"),
-        _ => ("Obstacle: the segment's ends", "must be finite"),
+    let (what, v, rule) = super::obstacles::placed(shape, pose, velocity).problem()?;
+    let field = match what {
+        "center.x" | "center.y" => "ObstaclePose.center",
+        "angle" => "ObstaclePose.angle",
+        "velocity.x" | "velocity.y" => "ObstacleVelocity.linear",
+        "angular velocity" => "ObstacleVelocity.angular",
+        "radius" => "Obstacle: the circle's radius",
+        "half.x" | "half.y" => "Obstacle: the box's half-extents",
+        "thickness" => "Obstacle: the segment's thickness",
+        "length" => "Obstacle: the segment",
+        _ => "Obstacle: the segment's ends",
     };
     Some(InputProblem {
         field,

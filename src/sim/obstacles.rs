@@ -74,6 +74,19 @@ impl Obstacles {
     }
 }
 
+/// An obstacle's components as the step reads them.
+pub(crate) fn placed(shape: &Obstacle, pose: &ObstaclePose, velocity: &ObstacleVelocity) -> Placed {
+    Placed {
+        shape: shape.0,
+        pose: Pose {
+            center: pose.center,
+            angle: pose.angle,
+            velocity: velocity.linear,
+            angular_velocity: velocity.angular,
+        },
+    }
+}
+
 /// Gathers the obstacles for this tick's steps (a handful of entities: read them all).
 pub(crate) fn gather_obstacles(
     mut obstacles: ResMut<Obstacles>,
@@ -95,15 +108,7 @@ pub(crate) fn gather_obstacles(
     o.entities.clear();
     for (e, _, shape, pose, vel) in all {
         o.entities.push(e);
-        o.placed.push(Placed {
-            shape: shape.0,
-            pose: Pose {
-                center: pose.center,
-                angle: pose.angle,
-                velocity: vel.linear,
-                angular_velocity: vel.angular,
-            },
-        });
+        o.placed.push(placed(shape, pose, vel));
     }
 }
 

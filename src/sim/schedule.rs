@@ -374,7 +374,7 @@ pub fn damping_enabled(params: Res<SimParams>) -> bool {
 /// Run condition: the scene has a ground that the ground pass clamps (with contact set, the
 /// contact pass handles the ground instead, with the particles' radius and friction).
 pub fn ground_enabled(params: Res<SimParams>) -> bool {
-    params.ground.is_some() && params.contact.is_none()
+    clamped_ground(&params).is_some()
 }
 
 /// Run condition: the contact pass has something to do: obstacles, or contact with a ground.
@@ -386,7 +386,19 @@ pub fn contact_enabled(
 }
 
 fn contact_needed(params: &SimParams, obstacles: &super::obstacles::Obstacles) -> bool {
-    !obstacles.placed.is_empty() || (params.contact.is_some() && params.ground.is_some())
+    surroundings(params, obstacles).active()
+}
+
+/// What the contact pass works against this step.
+fn surroundings<'a>(
+    params: &SimParams,
+    obstacles: &'a super::obstacles::Obstacles,
+) -> crate::solver::Surroundings<'a> {
+    crate::solver::Surroundings {
+        obstacles: &obstacles.placed,
+        ground: params.ground,
+        settings: params.contact,
+    }
 }
 
 /// The ground the step's own clamp handles (the ground pass, the fused sweep, XPBD's substeps):
@@ -511,11 +523,7 @@ fn collide(
     threads: Res<SolverThreads>,
     mut n: ResMut<PassCounts>,
 ) {
-    let around = crate::solver::Surroundings {
-        obstacles: &obstacles.placed,
-        ground: params.ground,
-        settings: params.contact,
-    };
+    let around = surroundings(&params, &obstacles);
     let (integrator, dt, g) = (params.integrator, params.dt, params.gravity);
     let contacts = step::collide(&mut solver.state, integrator, dt, g, &around, &threads);
     let o = obstacles.bypass_change_detection();

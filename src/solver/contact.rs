@@ -133,6 +133,13 @@ pub fn collide(
         around.surface(dt, gravity),
     );
     let obstacles = around.obstacles;
+    // Once a contact has put the particle back on a surface (normal n, pushed out by depth,
+    // the surface moving at surface_velocity): friction on the step's sliding, then the
+    // velocity's response.
+    let grip = |x: &mut DVec2, v: &mut DVec2, from, n, depth, surface_velocity: DVec2| {
+        hold(x, from, surface_velocity * dt, n, depth, surface.friction);
+        *v = respond(*v, surface_velocity, n, surface);
+    };
     let one = |x: &mut DVec2, v: &mut DVec2, u: DVec2, w: f64| -> usize {
         if w == 0.0 {
             return 0;
@@ -157,24 +164,13 @@ pub fn collide(
             let rest = step * (1.0 - t);
             let into = (-rest.dot(n)).max(0.0);
             *x = hit + rest + n * into;
-            let surface_velocity = o.velocity_at(*x);
-            hold(x, from, surface_velocity * dt, n, into, surface.friction);
-            *v = respond(*v, surface_velocity, n, surface);
+            grip(x, v, from, n, into, o.velocity_at(*x));
             contacts += 1;
         }
         for o in obstacles {
             if let Some(touch) = o.touch(*x, from, heading, r) {
                 *x += touch.normal * touch.depth;
-                let surface_velocity = o.velocity_at(*x);
-                hold(
-                    x,
-                    from,
-                    surface_velocity * dt,
-                    touch.normal,
-                    touch.depth,
-                    surface.friction,
-                );
-                *v = respond(*v, surface_velocity, touch.normal, surface);
+                grip(x, v, from, touch.normal, touch.depth, o.velocity_at(*x));
                 contacts += 1;
             }
         }
@@ -183,36 +179,31 @@ pub fn collide(
         {
             let depth = g + r - x.y;
             x.y = g + r;
-            hold(x, from, DVec2::ZERO, DVec2::Y, depth, surface.friction);
-            *v = respond(*v, DVec2::ZERO, DVec2::Y, surface);
+            grip(x, v, from, DVec2::Y, depth, DVec2::ZERO);
             contacts += 1;
         }
         contacts
+    };
+    // The path's velocity: the drift's, or the end velocity itself (read before it changes).
+    let part = |x: &mut [DVec2], v: &mut [DVec2], u: Option<&[DVec2]>, w: &[f64]| {
+        let mut n = 0;
+        for i in 0..x.len() {
+            let ui = u.map_or(v[i], |u| u[i]);
+            n += one(&mut x[i], &mut v[i], ui, w[i]);
+        }
+        n
     };
     match u {
         Some(u) => threads.chunked(
             springs,
             (&mut x[..], &mut v[..], u, w),
-            |(x, v, u, w)| {
-                let mut n = 0;
-                for i in 0..x.len() {
-                    n += one(&mut x[i], &mut v[i], u[i], w[i]);
-                }
-                n
-            },
+            |(x, v, u, w)| part(x, v, Some(u), w),
             |a, b| a + b,
         ),
         None => threads.chunked(
             springs,
             (&mut x[..], &mut v[..], w),
-            |(x, v, w)| {
-                let mut n = 0;
-                for i in 0..x.len() {
-                    let vi = v[i];
-                    n += one(&mut x[i], &mut v[i], vi, w[i]);
-                }
-                n
-            },
+            |(x, v, w)| part(x, v, None, w),
             |a, b| a + b,
         ),
     }

@@ -192,10 +192,11 @@ impl Placed {
         self.pose.angle += self.pose.angular_velocity * dt;
     }
 
-    /// What is wrong with the shape or pose, as (what, value), if anything: a radius,
-    /// half-extent or thickness that is not finite and positive (a thickness may be 0), a
-    /// segment of zero length, or a non-finite pose.
-    pub fn problem(&self) -> Option<(&'static str, f64)> {
+    /// What is wrong with the shape or pose, as (what, value, rule), if anything: a radius or
+    /// half-extent that is not finite and positive, a thickness that is not finite and >= 0,
+    /// a segment of zero length, or a non-finite pose or velocity.
+    pub fn problem(&self) -> Option<(&'static str, f64, &'static str)> {
+        const FINITE: &str = "must be finite";
         let p = &self.pose;
         for (what, v) in [
             ("center.x", p.center.x),
@@ -206,21 +207,22 @@ impl Placed {
             ("angular velocity", p.angular_velocity),
         ] {
             if !v.is_finite() {
-                return Some((what, v));
+                return Some((what, v, FINITE));
             }
         }
+        const POSITIVE: &str = "must be finite and > 0";
         let positive = |v: f64| v.is_finite() && v > 0.0;
         match self.shape {
-            Shape::Circle { radius } if !positive(radius) => Some(("radius", radius)),
-            Shape::Box { half } if !positive(half.x) => Some(("half.x", half.x)),
-            Shape::Box { half } if !positive(half.y) => Some(("half.y", half.y)),
+            Shape::Circle { radius } if !positive(radius) => Some(("radius", radius, POSITIVE)),
+            Shape::Box { half } if !positive(half.x) => Some(("half.x", half.x, POSITIVE)),
+            Shape::Box { half } if !positive(half.y) => Some(("half.y", half.y, POSITIVE)),
             Shape::Segment { a, b, thickness } => {
                 if !(thickness.is_finite() && thickness >= 0.0) {
-                    Some(("thickness", thickness))
+                    Some(("thickness", thickness, "must be finite and >= 0"))
                 } else if !(a.is_finite() && b.is_finite()) {
-                    Some(("end", f64::NAN))
+                    Some(("end", f64::NAN, FINITE))
                 } else if a == b {
-                    Some(("length", 0.0))
+                    Some(("length", 0.0, "a segment needs two different ends"))
                 } else {
                     None
                 }
