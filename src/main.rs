@@ -287,7 +287,10 @@ fn run(args: RunArgs) -> ExitCode {
             println!("{} springs tore", r.springs_torn);
         }
         if r.contacts > 0 {
-            println!("{} contacts in the last step", r.contacts);
+            println!(
+                "{} contacts in the last step ({} between particles)",
+                r.contacts, r.pair_contacts
+            );
         }
         if let Some(t) = &r.pass_seconds {
             let share = |s: f64| 100.0 * s / t.total().max(1e-12);

@@ -132,9 +132,12 @@ pub struct RunReport {
     pub finite: bool,
     /// Springs broken by tearing during the run (0 when tearing is off).
     pub springs_torn: u64,
-    /// Particle–surface contacts (ground and obstacles) resolved in the last step; 0 when the
-    /// scene has no obstacles and no contact settings (the contact pass does not run).
+    /// Contacts resolved in the last step, particle–surface (ground and obstacles) and particle
+    /// pairs together; 0 when the scene has no obstacles and no contact settings (the contact
+    /// pass does not run).
     pub contacts: usize,
+    /// Of those, the particle pairs (0 unless `contact.particles` is on).
+    pub pair_contacts: usize,
     /// Mean conjugate-gradient iterations per step (implicit Euler only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub cg_iterations_per_step: Option<f64>,
@@ -289,7 +292,8 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
         omega_max_bound: stability.omega_bound,
         finite: blowup_step.is_none() && solver.state_is_finite(),
         springs_torn: world.resource::<sim::Tearing>().torn,
-        contacts: world.resource::<sim::Obstacles>().contacts,
+        contacts: world.resource::<sim::Obstacles>().contacts.total(),
+        pair_contacts: world.resource::<sim::Obstacles>().contacts.pairs,
         cg_iterations_per_step: solve.cg_iterations_per_step,
         iterations: params.iterations,
         solve,

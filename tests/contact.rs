@@ -186,7 +186,7 @@ fn a_moving_platform_carries_a_particle_by_friction() {
             (pos(&app, 0).y - 0.3).abs() < 1e-3,
             "{integrator:?}: rests on it"
         );
-        assert!(app.world().resource::<Obstacles>().contacts >= 1);
+        assert!(app.world().resource::<Obstacles>().contacts.surfaces >= 1);
     }
 }
 

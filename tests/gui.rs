@@ -527,18 +527,18 @@ fn every_control_works_under_real_input_and_the_log_stays_quiet() {
 
     // The panel's tearing field takes a typed percentage: 30 is a strain of 0.3 (it was read
     // as 30, 3000 %, and clamped to 200 %). The row's place is the empty scene's panel
-    // layout, under the contact row.
-    s.move_px(95, 305);
+    // layout, under the contact rows.
+    s.move_px(95, 326);
     s.x(&["click", "1"]);
     s.expect("tearing on", |st| st["tear"] == 0.6);
-    s.move_px(242, 305);
+    s.move_px(242, 326);
     s.x(&["click", "1"]);
     std::thread::sleep(Duration::from_millis(300));
     s.x(&["windowfocus", "--sync", &s.window]);
     s.x(&["type", "--delay", "80", "30"]);
     s.key("Return");
     s.expect("30 % typed", |st| st["tear"] == 0.3);
-    s.move_px(95, 305);
+    s.move_px(95, 326);
     s.x(&["click", "1"]);
     s.expect("tearing off", |st| st["tear"].is_null());
 
@@ -707,6 +707,57 @@ fn every_control_works_under_real_input_and_the_log_stays_quiet() {
     s.expect("attraction released", |st| {
         st["attracting"] == false && st["external_force"] == false
     });
+
+    // Obstacles: B + drag builds a box, O + drag a circle, L + drag a segment (while paused).
+    s.key("g");
+    s.expect("paused", |st| st["paused"] == true);
+    let built = |st: &serde_json::Value| st["obstacles"].as_array().map_or(0, |a| a.len());
+    for (i, (key, a, b)) in [
+        ("b", (0.15, 0.3), (0.3, 0.2)),
+        ("o", (0.8, 0.3), (0.85, 0.3)),
+        ("l", (0.1, 0.6), (0.3, 0.5)),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        s.x(&["windowfocus", "--sync", &s.window]);
+        s.x(&["keydown", key]);
+        s.drag("1", a, b, 5);
+        s.x(&["keyup", key]);
+        s.expect(&format!("obstacle {} built", i + 1), |st| {
+            built(st) == i + 1
+        });
+    }
+    // A press on the box moves it; undo puts it back.
+    let box_at = |st: &serde_json::Value| {
+        let o = st["obstacles"].as_array().unwrap();
+        o.iter()
+            .map(|c| (c[0].as_f64().unwrap(), c[1].as_f64().unwrap()))
+            .find(|c| (c.1 - 0.25).abs() < 0.2 && c.0 < 0.5 && c.1 < 0.45)
+    };
+    let before = box_at(&s.status()).expect("the box's centre");
+    assert!(
+        (before.0 - 0.225).abs() < 0.01 && (before.1 - 0.25).abs() < 0.01,
+        "{before:?}"
+    );
+    s.drag("1", (0.2, 0.25), (0.3, 0.35), 5);
+    s.expect("the box moved", |st| {
+        box_at(st).is_some_and(|c| (c.0 - 0.325).abs() < 0.01 && (c.1 - 0.35).abs() < 0.01)
+    });
+    s.key("ctrl+z");
+    s.expect("the move undone", |st| {
+        box_at(st).is_some_and(|c| (c.0 - before.0).abs() < 1e-6 && (c.1 - before.1).abs() < 1e-6)
+    });
+    // X on the circle deletes it; undo brings it back; redo deletes it again.
+    s.move_to(0.8, 0.3);
+    s.key("x");
+    s.expect("the circle deleted", |st| built(st) == 2);
+    s.key("ctrl+z");
+    s.expect("the delete undone", |st| built(st) == 3);
+    s.key("ctrl+shift+z");
+    s.expect("the delete redone", |st| built(st) == 2);
+    s.key("g");
+    s.expect("running again", |st| st["paused"] == false);
 
     // C clears; undo brings it all back.
     s.key("c");

@@ -178,7 +178,7 @@ fn despawn_contents(world: &mut World, params: SimParams) {
 }
 
 /// Despawns every obstacle and spawns the scene's, in its order.
-fn replace_obstacles(world: &mut World, obstacles: &[super::format::ObstacleDef]) {
+pub fn replace_obstacles(world: &mut World, obstacles: &[super::format::ObstacleDef]) {
     let old: Vec<Entity> = world
         .query_filtered::<Entity, With<Obstacle>>()
         .iter(world)

@@ -11,7 +11,7 @@ pub mod validate;
 pub use format::*;
 pub use generate::Expanded;
 pub use load::{
-    CurrentScene, LoadedScene, SceneError, explicit_state, load_into_world, replace_contents,
-    snapshot, spawn_expanded, to_ron,
+    CurrentScene, LoadedScene, SceneError, explicit_state, load_into_world, obstacle_defs,
+    replace_contents, replace_obstacles, snapshot, spawn_expanded, to_ron,
 };
 pub use validate::validate;

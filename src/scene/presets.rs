@@ -15,6 +15,12 @@ pub const BUILTIN: &[(&str, &str)] = &[
         include_str!("../../assets/scenes/cloth_on_ball.ron"),
     ),
     ("slope", include_str!("../../assets/scenes/slope.ron")),
+    ("pile", include_str!("../../assets/scenes/pile.ron")),
+    ("ropes", include_str!("../../assets/scenes/ropes.ron")),
+    (
+        "folding_cloth",
+        include_str!("../../assets/scenes/folding_cloth.ron"),
+    ),
 ];
 
 /// The scene the app opens with: the assignment's empty canvas.

@@ -67,8 +67,7 @@ pub fn check_params(p: &SimParams) -> Option<InputProblem> {
         let field = match field {
             "radius" => "SimParams.contact.radius",
             "friction" => "SimParams.contact.friction",
-            "restitution" => "SimParams.contact.restitution",
-            _ => "SimParams.contact.particles",
+            _ => "SimParams.contact.restitution",
         };
         return Some(problem(field, v, rule));
     }

@@ -58,8 +58,9 @@ pub struct ObstacleVelocity {
 pub struct Obstacles {
     pub(crate) placed: Vec<Placed>,
     pub(crate) entities: Vec<Entity>,
-    /// Particle–surface contacts (ground and obstacles) resolved in the last step.
-    pub contacts: usize,
+    /// The contacts the last step resolved: particle–surface (ground and obstacles) and
+    /// particle pairs.
+    pub contacts: crate::solver::Contacts,
 }
 
 impl Obstacles {

@@ -80,9 +80,10 @@ pub enum StepSystems {
     /// 5. The position update, x += dt u, with u the integrator's drift velocity; checks
     ///    finiteness.
     Advance,
-    /// 6. Contact with the obstacles, and with the ground when [`SimParams::contact`] is set
-    ///    ([`crate::solver::contact`]); then the obstacles move by their velocities. Runs only
-    ///    when the scene has obstacles or contact with a ground.
+    /// 6. Contact between particles when [`SimParams::contact`] asks for it
+    ///    ([`crate::solver::pairs`]), then with the obstacles, and with the ground when contact
+    ///    is set ([`crate::solver::contact`]); then the obstacles move by their velocities.
+    ///    Runs only when the scene has obstacles, contact with a ground, or particle pairs.
     Collide,
 }
 
@@ -525,7 +526,16 @@ fn collide(
 ) {
     let around = surroundings(&params, &obstacles);
     let (integrator, dt, g) = (params.integrator, params.dt, params.gravity);
-    let contacts = step::collide(&mut solver.state, integrator, dt, g, &around, &threads);
+    let s = &mut *solver;
+    let contacts = step::collide(
+        &mut s.state,
+        &mut s.work,
+        integrator,
+        dt,
+        g,
+        &around,
+        &threads,
+    );
     let o = obstacles.bypass_change_detection();
     o.contacts = contacts;
     let mut moved = false;

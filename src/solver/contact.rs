@@ -13,7 +13,7 @@
 //! only shrinks in size (|e·vₙ| ≤ |vₙ| with e ≤ 1), the tangential part only shrinks, and the
 //! position moves only back toward the surface, by at most the step's own travel into it.
 
-use super::obstacle::{Placed, Surface, respond};
+use super::obstacle::{Placed, SLOP, Surface, respond};
 use super::parallel::Threads;
 use super::sweep::Motion;
 use glam::DVec2;
@@ -32,7 +32,7 @@ pub struct ContactSettings {
     /// The share of the normal approach speed kept after an impact, 0..=1.
     #[serde(default)]
     pub restitution: f64,
-    /// Particles collide with each other. Not yet supported: the check of the inputs refuses it.
+    /// Particles collide with each other, between bodies and within one ([`super::pairs`]).
     #[serde(default)]
     pub particles: bool,
 }
@@ -61,13 +61,6 @@ impl ContactSettings {
         if !(non_negative(self.restitution) && self.restitution <= 1.0) {
             return Some(("restitution", self.restitution, "must be between 0 and 1"));
         }
-        if self.particles {
-            return Some((
-                "particles",
-                1.0,
-                "collisions between particles are not supported yet; set it to false",
-            ));
-        }
         None
     }
 }
@@ -88,7 +81,8 @@ pub struct Surroundings<'a> {
 impl Surroundings<'_> {
     /// Whether the pass has anything to do.
     pub fn active(&self) -> bool {
-        !self.obstacles.is_empty() || (self.settings.is_some() && self.ground.is_some())
+        let pairs = self.settings.is_some_and(|s| s.particles && s.radius > 0.0);
+        !self.obstacles.is_empty() || (self.settings.is_some() && self.ground.is_some()) || pairs
     }
 
     /// The ground this pass handles: only when contact is set (else the step's own clamp does).
@@ -100,7 +94,24 @@ impl Surroundings<'_> {
         self.settings.map_or(0.0, |s| s.radius)
     }
 
-    fn surface(&self, dt: f64, gravity: DVec2) -> Surface {
+    /// `p` pushed out of the ground (when contact is set) and the obstacles by the radius,
+    /// positions only: what the pair solve holds its particles to between its iterations, so
+    /// that a particle pressed against the ground by another stays on it and the other moves.
+    pub(crate) fn keep_out(&self, mut p: DVec2) -> DVec2 {
+        let r = self.radius();
+        for o in self.obstacles {
+            let (d, n) = o.distance(p);
+            if d < r {
+                p += n * (r - d);
+            }
+        }
+        if let Some(g) = self.ground() {
+            p.y = p.y.max(g + r);
+        }
+        p
+    }
+
+    pub(crate) fn surface(&self, dt: f64, gravity: DVec2) -> Surface {
         let s = self.settings.unwrap_or_default();
         Surface {
             friction: s.friction,
@@ -151,9 +162,16 @@ pub fn collide(
         // Where the particle was going (its velocity, for a step that did not move it): a
         // particle on a thin segment's line belongs on the side it is not heading to.
         let heading = if *x != from { *x - from } else { *v };
+        // Only the obstacles the path comes near (a test of the distance to each one's centre:
+        // most particles of a big cloth are far from every obstacle).
+        let travel = (*x - from).length();
+        let near = |o: &Placed, x: DVec2| {
+            (x - o.pose.center).length() <= o.bound() + r + travel + 2.0 * SLOP
+        };
         let first = obstacles
             .iter()
             .enumerate()
+            .filter(|(_, o)| near(o, *x))
             .filter_map(|(i, o)| o.first_hit(from, *x, r).map(|t| (t, i)))
             .min_by(|a, b| a.0.total_cmp(&b.0));
         if let Some((t, i)) = first {
@@ -168,6 +186,9 @@ pub fn collide(
             contacts += 1;
         }
         for o in obstacles {
+            if !near(o, *x) {
+                continue;
+            }
             if let Some(touch) = o.touch(*x, from, heading, r) {
                 *x += touch.normal * touch.depth;
                 grip(x, v, from, touch.normal, touch.depth, o.velocity_at(*x));
@@ -175,10 +196,10 @@ pub fn collide(
             }
         }
         if let Some(g) = ground
-            && x.y < g + r
+            && x.y < g + r + SLOP
         {
-            let depth = g + r - x.y;
-            x.y = g + r;
+            let depth = (g + r - x.y).max(0.0);
+            x.y = x.y.max(g + r);
             grip(x, v, from, DVec2::Y, depth, DVec2::ZERO);
             contacts += 1;
         }

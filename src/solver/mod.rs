@@ -28,6 +28,7 @@ pub mod method;
 pub mod obstacle;
 pub(crate) mod ordering;
 pub(crate) mod pages;
+pub mod pairs;
 pub(crate) mod parallel;
 pub(crate) mod projective;
 pub(crate) mod spring;
@@ -45,11 +46,12 @@ pub use contact::{ContactSettings, Surroundings};
 pub use integrators::CgSettings;
 pub use method::{Integrator, Iterations};
 pub use obstacle::{Placed, Pose, Shape};
+pub use pairs::{PairReport, Pairs};
 pub use parallel::{MAX_THREADS, PARALLEL_MIN_SPRINGS, Threads};
 pub use projective::FactorOrder;
 pub use stability::StabilityEstimate;
 pub use state::{Energy, PackedSpring, State};
-pub use step::{Method, SolveStats, Workspace};
+pub use step::{Contacts, Method, SolveStats, Workspace};
 pub use sweep::{Contact, Motion, Sweep};
 
 /// Each vector's two coordinates as bits, for the tests that ask two ways of computing the same

@@ -30,7 +30,9 @@
 //! 5. **Advance** ([`advance`]): x += dt u (u = v for symplectic and implicit Euler and
 //!    projective dynamics, the start-of-step v for explicit Euler, the drift for the others),
 //!    and a check that everything stayed finite.
-//! 6. **Collide** ([`collide`]): only when the scene has obstacles or contact settings. Each
+//! 6. **Collide** ([`collide`]): only when the scene has obstacles or contact settings. First,
+//!    with `particles` on, pairs of particles closer than 2r are pushed apart and lose their
+//!    approach velocity ([`super::pairs`]). Then each
 //!    free particle that ended the step within its radius of an obstacle (or of the ground,
 //!    when contact is set: the ground then leaves pass 4) is put back on the surface, after a
 //!    swept test of its path so that it cannot pass through a thin one, and its velocity
@@ -48,6 +50,7 @@ use super::contact::{self, Surroundings};
 use super::integrators::{self, CgSettings, Scratch};
 use super::kernels;
 use super::method::{Integrator, Iterations};
+use super::pairs::{PairReport, Pairs};
 use super::parallel::Threads;
 use super::projective::{self, FactorOrder, Projective};
 use super::state::State;
@@ -63,6 +66,7 @@ pub struct Workspace {
     pub(crate) scratch: Scratch,
     pub(crate) projective: Projective,
     pub(crate) xpbd: Xpbd,
+    pub(crate) pairs: Pairs,
 }
 
 impl Workspace {
@@ -74,6 +78,8 @@ impl Workspace {
             scratch: self.scratch.repacked(),
             projective: std::mem::take(&mut self.projective),
             xpbd: std::mem::take(&mut self.xpbd),
+            // The lists name particles by index, which the repacking changed.
+            pairs: Pairs::default(),
         }
     }
 
@@ -95,6 +101,8 @@ impl Workspace {
             factor_order: pd.factor_order(),
             xpbd_sweeps_per_step: self.xpbd.sweeps_per_step(),
             xpbd_colours: self.xpbd.colours(),
+            pair_list_builds: self.pairs.rebuilds,
+            pair_iterations_per_step: self.pairs.iterations_per_step(),
         }
     }
 }
@@ -141,6 +149,13 @@ pub struct SolveStats {
     pub xpbd_sweeps_per_step: Option<f64>,
     /// XPBD: colours of the constraint graph (sweeps run colour by colour).
     pub xpbd_colours: usize,
+    /// Contact between particles: neighbour-list builds so far (a build lists every pair
+    /// within 2r plus the skin; the lists are kept while no unlisted pair can have come
+    /// within 2r).
+    pub pair_list_builds: u64,
+    /// Contact between particles: position iterations per step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pair_iterations_per_step: Option<f64>,
 }
 
 /// Pass 1, the body forces alone: f = m g + f_ext (what the position-based methods read).
@@ -279,19 +294,38 @@ pub fn advance(s: &mut State, integrator: Integrator, dt: f64, threads: &Threads
     s.non_finite = !finite;
 }
 
-/// Pass 6: contact with the obstacles, and with the ground when contact is set
-/// ([`super::contact`]), on where the step ended. Returns the contacts it resolved.
+/// Pass 6: contact between particles (when the settings ask for it, [`super::pairs`]), then
+/// with the obstacles, and with the ground when contact is set ([`super::contact`]), on where
+/// the step ended. Returns the contacts it resolved.
 pub fn collide(
     s: &mut State,
+    w: &mut Workspace,
     integrator: Integrator,
     dt: f64,
     gravity: DVec2,
     around: &Surroundings,
     threads: &Threads,
-) -> usize {
-    let u = contact::moves_with_drift(motion(integrator)).then_some(&s.drift[..]);
+) -> Contacts {
+    let pairs = match around.settings {
+        Some(c) if c.particles => {
+            let keep_out = |p| around.keep_out(p);
+            let surface = around.surface(dt, gravity);
+            // The methods whose velocity is where the step went (implicit Euler, projective
+            // dynamics, XPBD) take the push into it, as position-based dynamics does.
+            let follows = matches!(
+                integrator,
+                Integrator::ImplicitEuler | Integrator::ProjectiveDynamics | Integrator::Xpbd
+            )
+            .then_some(dt);
+            w.pairs
+                .collide(s, c.radius, surface, &keep_out, follows, threads)
+        }
+        _ => PairReport::default(),
+    };
+    let drift = contact::moves_with_drift(motion(integrator));
+    let u = drift.then_some(&s.drift[..]);
     let springs = s.springs.len();
-    contact::collide(
+    let surfaces = contact::collide(
         &mut s.x,
         &mut s.v,
         u,
@@ -301,7 +335,30 @@ pub fn collide(
         around,
         threads,
         springs,
-    )
+    );
+    Contacts {
+        surfaces,
+        pairs: pairs.contacts,
+        listed_pairs: pairs.listed,
+    }
+}
+
+/// What one step's contact pass resolved.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct Contacts {
+    /// Particle–surface contacts: the ground and the obstacles.
+    pub surfaces: usize,
+    /// Particle pairs touching (each pair once).
+    pub pairs: usize,
+    /// Pairs in the neighbour lists (within 2r plus the skin).
+    pub listed_pairs: usize,
+}
+
+impl Contacts {
+    /// Every contact: surfaces and pairs.
+    pub fn total(&self) -> usize {
+        self.surfaces + self.pairs
+    }
 }
 
 /// Passes 2 (the Euler kick only: the other methods' solves run before) to 5 as one sweep over

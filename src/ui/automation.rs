@@ -42,6 +42,7 @@ pub struct AppState<'w, 's> {
     tearing: Res<'w, Tearing>,
     attraction: Res<'w, Attraction>,
     pinned: Query<'w, 's, (), (With<Particle>, With<Pinned>)>,
+    obstacles: Query<'w, 's, &'static crate::sim::ObstaclePose, With<crate::sim::Obstacle>>,
 }
 
 /// Scenes up to this many particles list their positions in the status report.
@@ -87,6 +88,8 @@ pub fn drive(
             "real_time_factor": stats.real_time_factor,
             "elapsed": elapsed,
             "pinned": app.pinned.iter().len(),
+            // Each obstacle's centre (in no particular order).
+            "obstacles": app.obstacles.iter().map(|p| [p.center.x, p.center.y]).collect::<Vec<_>>(),
             "held": solver.kinematic,
             "springs_torn": app.tearing.torn,
             "tear": params.tear,

@@ -18,6 +18,17 @@ pub const CONTROLS: &[(&str, &str)] = &[
     ("P (cursor on a particle)", "pin or free it"),
     ("X or Delete (on a particle)", "delete it and its springs"),
     ("ctrl + left drag", "cut every spring the cursor crosses"),
+    (
+        "O + left drag",
+        "build a circle obstacle: centre, then radius",
+    ),
+    ("B + left drag", "build a box obstacle: corner to corner"),
+    ("L + left drag", "build a segment obstacle: end to end"),
+    (
+        "left press on an obstacle",
+        "move it; what rests on it follows by friction",
+    ),
+    ("X or Delete (on an obstacle)", "delete it"),
     ("C", "clear the canvas"),
     ("ctrl+Z", "undo"),
     ("ctrl+shift+Z or ctrl+Y", "redo"),

@@ -7,9 +7,10 @@
 
 use super::pointer::Gesture;
 use super::view::CanvasView;
-use crate::sim::{Attraction, Obstacles, SimParams, Solver, SolverIndex};
+use crate::sim::{Attraction, Obstacle, ObstaclePose, SimParams, Solver, SolverIndex};
 use bevy::asset::RenderAssetUsages;
 use bevy::camera::visibility::NoFrustumCulling;
+use bevy::math::DVec2;
 use bevy::mesh::{Indices, PrimitiveTopology, VertexAttributeValues};
 use bevy::prelude::*;
 
@@ -21,6 +22,8 @@ const PINNED: Color = Color::srgb(1.0, 0.75, 0.2);
 const HELD: Color = Color::srgb(0.35, 0.85, 1.0);
 const ATTRACTION: Color = Color::srgba(0.35, 0.85, 1.0, 0.8);
 const OBSTACLE: Color = Color::srgb(0.55, 0.75, 0.45);
+/// An obstacle being built (the drag's preview).
+const BUILDING: Color = Color::srgb(0.95, 0.8, 0.35);
 /// Particle dot radius, in logical pixels.
 const DOT_PX: f32 = 3.5;
 /// Half the width of a spring line, in logical pixels.
@@ -72,6 +75,7 @@ fn empty_mesh() -> Mesh {
 }
 
 /// Rebuilds both meshes from the solver when it or the view changed.
+#[allow(clippy::too_many_arguments)] // a Bevy system: its parameters are what it reads
 pub fn update_batches(
     batches: Res<Batches>,
     solver: Res<Solver>,
@@ -80,8 +84,9 @@ pub fn update_batches(
     palette: Local<StrainPalette>,
     gesture: Res<Gesture>,
     indices: Query<&SolverIndex>,
+    params: Res<SimParams>,
 ) {
-    if !(solver.is_changed() || view.is_changed() || gesture.is_changed()) {
+    if !(solver.is_changed() || view.is_changed() || gesture.is_changed() || params.is_changed()) {
         return;
     }
     // The grabbed particle is drawn in its own colour.
@@ -119,7 +124,10 @@ pub fn update_batches(
         );
     }
     if let Some(mut mesh) = meshes.get_mut(&batches.dots) {
-        let radius = DOT_PX / view.scale;
+        // With contact on, a particle is drawn at its collision radius (never smaller than a
+        // dot), so that what touches is seen touching.
+        let contact_radius = params.contact.map_or(0.0, |c| c.radius) as f32;
+        let radius = (DOT_PX / view.scale).max(contact_radius);
         let rim: Vec<Vec2> = (0..DOT_SIDES)
             .map(|i| Vec2::from_angle(i as f32 * std::f32::consts::TAU / DOT_SIDES as f32) * radius)
             .collect();
@@ -251,35 +259,58 @@ fn strain_color(t: f32) -> Color {
     }
 }
 
-/// The obstacles' outlines, at the poses the last tick left them (a few gizmo lines each).
-pub fn draw_obstacles(mut gizmos: Gizmos, obstacles: Res<Obstacles>) {
+/// The obstacles' outlines, at their poses (a few gizmo lines each), and the one a build drag
+/// would make.
+pub fn draw_obstacles(
+    mut gizmos: Gizmos,
+    obstacles: Query<(&Obstacle, &ObstaclePose)>,
+    gesture: Res<Gesture>,
+    view: Res<CanvasView>,
+) {
+    for (o, pose) in &obstacles {
+        outline(&mut gizmos, o.0, pose.center, pose.angle, OBSTACLE);
+    }
+    if let Gesture::Build { kind, from, to } = *gesture {
+        let least = super::pointer::CLICK_SLOP_PX as f64 * view.pixel();
+        if let Some((shape, center)) = kind.shape(from, to, least) {
+            outline(&mut gizmos, shape, center, 0.0, BUILDING);
+        }
+    }
+}
+
+/// One obstacle's outline.
+fn outline(
+    gizmos: &mut Gizmos,
+    shape: crate::solver::Shape,
+    center: DVec2,
+    angle: f64,
+    color: Color,
+) {
     use crate::solver::Shape;
-    for o in obstacles.placed() {
-        let (c, angle) = (o.pose.center.as_vec2(), o.pose.angle as f32);
-        match o.shape {
-            Shape::Circle { radius } => {
-                gizmos.circle_2d(Isometry2d::from_translation(c), radius as f32, OBSTACLE);
-            }
-            Shape::Box { half } => {
-                gizmos.rect_2d(
-                    Isometry2d::new(c, Rot2::radians(angle)),
-                    2.0 * half.as_vec2(),
-                    OBSTACLE,
-                );
-            }
-            Shape::Segment { a, b, thickness } => {
-                let turn = Rot2::radians(angle);
-                let (a, b) = (c + turn * a.as_vec2(), c + turn * b.as_vec2());
-                if thickness > 0.0 {
-                    let r = thickness as f32;
-                    let side = (b - a).normalize_or_zero().perp() * r;
-                    gizmos.line_2d(a + side, b + side, OBSTACLE);
-                    gizmos.line_2d(a - side, b - side, OBSTACLE);
-                    gizmos.circle_2d(Isometry2d::from_translation(a), r, OBSTACLE);
-                    gizmos.circle_2d(Isometry2d::from_translation(b), r, OBSTACLE);
-                } else {
-                    gizmos.line_2d(a, b, OBSTACLE);
-                }
+    let (c, angle) = (center.as_vec2(), angle as f32);
+    match shape {
+        Shape::Circle { radius } => {
+            gizmos.circle_2d(Isometry2d::from_translation(c), radius as f32, color);
+        }
+        Shape::Box { half } => {
+            gizmos.rect_2d(
+                Isometry2d::new(c, Rot2::radians(angle)),
+                2.0 * half.as_vec2(),
+                color,
+            );
+        }
+        Shape::Segment { a, b, thickness } => {
+            let turn = Rot2::radians(angle);
+            let (a, b) = (c + turn * a.as_vec2(), c + turn * b.as_vec2());
+            if thickness > 0.0 {
+                let r = thickness as f32;
+                let side = (b - a).normalize_or_zero().perp() * r;
+                gizmos.line_2d(a + side, b + side, color);
+                gizmos.line_2d(a - side, b - side, color);
+                gizmos.circle_2d(Isometry2d::from_translation(a), r, color);
+                gizmos.circle_2d(Isometry2d::from_translation(b), r, color);
+            } else {
+                gizmos.line_2d(a, b, color);
             }
         }
     }

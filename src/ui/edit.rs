@@ -5,6 +5,7 @@
 use super::history;
 use crate::scene::ClickRules;
 use crate::sim::*;
+use crate::solver::Shape;
 use bevy::math::DVec2;
 use bevy::prelude::*;
 
@@ -71,4 +72,16 @@ pub fn cut(commands: &mut Commands, springs: &[Entity], first_of_stroke: bool) {
     for &e in springs {
         commands.entity(e).try_despawn();
     }
+}
+
+/// Adds an obstacle of `shape` centred at `center`, unrotated and at rest.
+pub fn add_obstacle(commands: &mut Commands, shape: Shape, center: DVec2) {
+    commands.queue(history::before("obstacle"));
+    commands.spawn((Obstacle(shape), ObstaclePose { center, angle: 0.0 }));
+}
+
+/// Deletes an obstacle.
+pub fn delete_obstacle(commands: &mut Commands, obstacle: Entity) {
+    commands.queue(history::before("delete obstacle"));
+    commands.entity(obstacle).try_despawn();
 }

@@ -1,5 +1,5 @@
 //! Undo and redo of every edit: adding, grabbing, pinning, deleting, cutting, tearing,
-//! clearing, and the panel's parameter changes.
+//! clearing, building, moving and deleting obstacles, and the panel's parameter changes.
 //!
 //! Each entry is the whole simulation state just before the edit (parameters, clock, every
 //! particle and spring), so undoing restores exactly what was there, structure and motion
@@ -8,7 +8,10 @@
 //! kind of edit (a slider drag, a tearing cloth) within [`COALESCE`] is one entry
 //! ([`record_burst`]); discrete edits (clicks, keys) are one entry each ([`record`]).
 
-use crate::scene::{Expanded, ParticleDef, SpringDef, explicit_state, replace_contents};
+use crate::scene::{
+    Expanded, ObstacleDef, ParticleDef, SpringDef, explicit_state, obstacle_defs, replace_contents,
+    replace_obstacles,
+};
 use crate::sim::{SimClock, SimParams, SimStatus, watch::EnergyWatch};
 use bevy::prelude::*;
 use std::collections::VecDeque;
@@ -27,6 +30,8 @@ pub struct State {
     pub clock: SimClock,
     pub particles: Vec<ParticleDef>,
     pub springs: Arc<Vec<SpringDef>>,
+    /// The obstacles at their poses.
+    pub obstacles: Vec<ObstacleDef>,
 }
 
 #[derive(Debug, Clone)]
@@ -86,6 +91,7 @@ fn capture(world: &mut World, params: Option<SimParams>) -> State {
         clock: *world.resource::<SimClock>(),
         particles,
         springs,
+        obstacles: obstacle_defs(world),
     }
 }
 
@@ -150,6 +156,9 @@ fn restore(world: &mut World, state: &State) {
         springs: state.springs.to_vec(),
     };
     replace_contents(world, params, &expanded);
+    if obstacle_defs(world) != state.obstacles {
+        replace_obstacles(world, &state.obstacles);
+    }
     *world.resource_mut::<SimClock>() = state.clock;
     *world.resource_mut::<SimStatus>() = SimStatus::Running;
     if let Some(mut watch) = world.get_resource_mut::<EnergyWatch>() {

@@ -70,7 +70,8 @@ pub fn keyboard(
     }
 }
 
-/// P: pin or free the particle under the cursor. X / Delete: delete it and its springs.
+/// P: pin or free the particle under the cursor. X / Delete: delete it and its springs, or,
+/// with no particle there, the obstacle under the cursor.
 #[allow(clippy::too_many_arguments)]
 pub fn particle_keys(
     mut commands: Commands,
@@ -82,6 +83,7 @@ pub fn particle_keys(
     mut picking: ResMut<Picking>,
     pinned: Query<Has<Pinned>, With<Particle>>,
     springs: Query<(Entity, &Spring)>,
+    obstacles: super::pointer::ObstacleQuery,
 ) {
     // The first such press of the frame: the particle under the cursor is picked from the
     // frame's positions, which a second edit in the same frame would not see change.
@@ -102,6 +104,13 @@ pub fn particle_keys(
         .unwrap_or_default()
         .radius;
     let Some(particle) = picking.nearest(&solver, at, cursor.pick_radius(), cell) else {
+        // No particle there: X or Delete on an obstacle deletes it.
+        if press.key != KeyCode::KeyP
+            && let Some((obstacle, _)) =
+                super::pointer::obstacle_at(&obstacles, at, cursor.pick_radius())
+        {
+            edit::delete_obstacle(&mut commands, obstacle);
+        }
         return;
     };
     let Ok(is_pinned) = pinned.get(particle) else {

@@ -325,6 +325,23 @@ pub fn side_panel(
                 });
                 ui.end_row();
 
+                // Its own row: the contact row has no room left for it.
+                ui.label("");
+                ui.add_enabled_ui(p.contact.is_some(), |ui| {
+                    let c = p.contact.as_mut().unwrap_or(&mut state.contact);
+                    let hover = "particles collide with each other, in one body and between \
+                                 bodies (not those joined by a spring)";
+                    if ui
+                        .checkbox(&mut c.particles, "particle pairs collide")
+                        .on_hover_text(hover)
+                        .changed()
+                        && let Some(c) = p.contact
+                    {
+                        state.contact = c;
+                    }
+                });
+                ui.end_row();
+
                 ui.label("Tearing");
                 ui.horizontal(|ui| {
                     let mut on = p.tear.is_some();

@@ -1,5 +1,7 @@
 //! Mouse gestures on the canvas: a press on a particle grabs it, a click on empty canvas adds
-//! one (shift: pinned), ctrl + drag cuts springs, the right button attracts.
+//! one (shift: pinned), ctrl + drag cuts springs, the right button attracts. With O, B or L
+//! held a left drag builds an obstacle (a circle, a box, a segment), and a press on an
+//! obstacle moves it.
 //!
 //! The grab is kinematic: while held, the particle is placed at the cursor every frame and
 //! moves with the cursor's velocity during the ticks in between (the solver treats it as
@@ -14,6 +16,7 @@ use super::pick::Picking;
 use super::view::CanvasView;
 use crate::scene::{ClickRules, CurrentScene};
 use crate::sim::*;
+use crate::solver::{Placed, Shape};
 use bevy::ecs::entity::{Entities, EntityHashSet};
 use bevy::ecs::system::SystemParam;
 use bevy::math::DVec2;
@@ -51,6 +54,71 @@ pub enum Gesture {
         at: DVec2,
         pinned: bool,
     },
+    /// A drag with O, B or L held: the obstacle from where it began to the cursor, built when
+    /// the button comes up.
+    Build {
+        kind: Build,
+        from: DVec2,
+        to: DVec2,
+    },
+    /// A press on an obstacle: it follows the cursor (kept at `offset` from it) with the
+    /// cursor's velocity, which what rests on it feels through friction; it stops on release.
+    MoveObstacle {
+        obstacle: Entity,
+        offset: DVec2,
+        last: DVec2,
+        velocity: DVec2,
+    },
+}
+
+/// The obstacle a build drag makes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Build {
+    /// O: a circle, centred where the drag began, through the cursor.
+    Circle,
+    /// B: a box, with corners where the drag began and at the cursor.
+    Box,
+    /// L: a segment (a line of thickness 0) from where the drag began to the cursor.
+    Segment,
+}
+
+impl Build {
+    /// The build key held now, if any.
+    fn held(keys: &ButtonInput<KeyCode>) -> Option<Build> {
+        [
+            (KeyCode::KeyO, Build::Circle),
+            (KeyCode::KeyB, Build::Box),
+            (KeyCode::KeyL, Build::Segment),
+        ]
+        .into_iter()
+        .find(|(k, _)| keys.pressed(*k) || keys.just_released(*k))
+        .map(|(_, b)| b)
+    }
+
+    /// The obstacle a drag from `from` to `to` builds, as its shape and centre: `None` when it
+    /// is smaller than `least` (m), a click rather than a drag.
+    pub fn shape(self, from: DVec2, to: DVec2, least: f64) -> Option<(Shape, DVec2)> {
+        let d = to - from;
+        match self {
+            Build::Circle => (d.length() >= least).then(|| {
+                let radius = d.length();
+                (Shape::Circle { radius }, from)
+            }),
+            Build::Box => (d.x.abs() >= least && d.y.abs() >= least).then(|| {
+                let half = d.abs() * 0.5;
+                (Shape::Box { half }, from + d * 0.5)
+            }),
+            Build::Segment => (d.length() >= least).then(|| {
+                let half = d * 0.5;
+                let segment = Shape::Segment {
+                    a: -half,
+                    b: half,
+                    thickness: 0.0,
+                };
+                (segment, from + half)
+            }),
+        }
+    }
 }
 
 /// The cursor in window and world coordinates, and whether it may start a gesture (on the
@@ -123,6 +191,7 @@ pub fn press(
     solver: Res<Solver>,
     mut picking: ResMut<Picking>,
     mut gesture: ResMut<Gesture>,
+    obstacles: ObstacleQuery,
 ) {
     if !buttons.just_pressed(MouseButton::Left) {
         return;
@@ -131,6 +200,14 @@ pub fn press(
         return;
     };
     let (shift, ctrl) = modifiers(&keys);
+    if let Some(kind) = Build::held(&keys) {
+        *gesture = Gesture::Build {
+            kind,
+            from: at,
+            to: at,
+        };
+        return;
+    }
     if ctrl {
         *gesture = Gesture::Cut {
             last: at,
@@ -149,7 +226,44 @@ pub fn press(
         };
         return;
     }
+    if let Some((obstacle, center)) = obstacle_at(&obstacles, at, cursor.pick_radius()) {
+        commands.queue(super::history::before("move obstacle"));
+        *gesture = Gesture::MoveObstacle {
+            obstacle,
+            offset: center - at,
+            last: at,
+            velocity: DVec2::ZERO,
+        };
+        return;
+    }
     *gesture = Gesture::Add { at, pinned: shift };
+}
+
+/// The cursor's smoothed velocity (time constant [`VELOCITY_SMOOTHING`]) as it moves from
+/// `last` to `at` in `dt`; `last` becomes `at`.
+fn follow(velocity: &mut DVec2, last: &mut DVec2, at: DVec2, dt: f64) {
+    if dt > 0.0 {
+        let alpha = 1.0 - (-dt / VELOCITY_SMOOTHING).exp();
+        *velocity += ((at - *last) / dt - *velocity) * alpha;
+    }
+    *last = at;
+}
+
+/// The obstacles as entities, for picking.
+pub type ObstacleQuery<'w, 's> = Query<'w, 's, (Entity, &'static Obstacle, &'static ObstaclePose)>;
+
+/// The obstacle under `at` (inside it, or within `radius` of its outline), and its centre:
+/// the nearest when several are.
+pub fn obstacle_at(obstacles: &ObstacleQuery, at: DVec2, radius: f64) -> Option<(Entity, DVec2)> {
+    obstacles
+        .iter()
+        .map(|(e, o, pose)| {
+            let (d, _) = Placed::at(o.0, pose.center, pose.angle).distance(at);
+            (d, e, pose.center)
+        })
+        .filter(|(d, ..)| *d <= radius)
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, e, c)| (e, c))
 }
 
 /// The scene's click rules (radius, stiffness, mass, first pinned), or the assignment's.
@@ -195,11 +309,56 @@ pub fn drag(
     mut picking: ResMut<Picking>,
     mut gesture: ResMut<Gesture>,
     mut particles: Query<(&mut Position, &mut Velocity), With<Particle>>,
+    mut moving: Query<(&mut ObstaclePose, &mut ObstacleVelocity)>,
 ) {
     let held = buttons.pressed(MouseButton::Left);
     let at = cursor.world();
     match &mut *gesture {
         Gesture::None => {}
+        Gesture::Build { kind, from, to } => {
+            if let Some(at) = at {
+                *to = at;
+            }
+            if !held {
+                if let Some((shape, center)) = kind.shape(*from, *to, cursor.click_slop()) {
+                    edit::add_obstacle(&mut commands, shape, center);
+                }
+                *gesture = Gesture::None;
+            }
+        }
+        Gesture::MoveObstacle {
+            obstacle,
+            offset,
+            last,
+            velocity,
+        } => {
+            let Ok((mut pose, mut vel)) = moving.get_mut(*obstacle) else {
+                // Deleted or undone under the cursor.
+                *gesture = Gesture::None;
+                return;
+            };
+            if let Some(at) = at {
+                follow(velocity, last, at, time.delta_secs_f64());
+                let center = at + *offset;
+                if pose.center != center {
+                    pose.center = center;
+                }
+            }
+            let v = if params.paused || !held {
+                DVec2::ZERO
+            } else {
+                *velocity
+            };
+            if vel.linear != v || vel.angular != 0.0 {
+                *vel = ObstacleVelocity {
+                    linear: v,
+                    angular: 0.0,
+                };
+            }
+            if !held {
+                *gesture = Gesture::None;
+            }
+        }
         &mut Gesture::Add {
             at: pressed,
             pinned,
@@ -233,12 +392,7 @@ pub fn drag(
                 return;
             };
             if let Some(at) = at {
-                let dt = time.delta_secs_f64();
-                if dt > 0.0 {
-                    let alpha = 1.0 - (-dt / VELOCITY_SMOOTHING).exp();
-                    *velocity += ((at - *last) / dt - *velocity) * alpha;
-                }
-                *last = at;
+                follow(velocity, last, at, time.delta_secs_f64());
                 pos.set_if_neq(Position(at));
             }
             let v = if params.paused {

@@ -1,0 +1,207 @@
+//! Contact between particles: soft boxes stacked under every integrator, a strip of cloth that
+//! folds onto itself, and a rope across a rope. Checked by state, at the end of every step.
+
+mod common;
+use bevy::math::DVec2;
+use common::*;
+use hooke::scene::{Generator, Pin, Scene};
+use hooke::sim::{ContactSettings, Integrator, Obstacles, Solver};
+
+const G: f64 = 9.8;
+
+/// Contact settings with particle pairs on.
+fn pairs_on(radius: f64, friction: f64) -> Option<ContactSettings> {
+    Some(ContactSettings {
+        radius,
+        friction,
+        restitution: 0.0,
+        particles: true,
+    })
+}
+
+/// A soft box: a `n`×`n` grid with shear springs, `size` wide, its lower left corner at `at`.
+fn soft_box(n: usize, size: f64, at: (f64, f64), k: f64) -> Generator {
+    Generator::Grid {
+        cols: n,
+        rows: n,
+        min: at,
+        max: (at.0 + size, at.1 + size),
+        // 0.25 kg a particle: heavier boxes of this stiffness are jelly (1 kg: the lower one
+        // squashed by 37 % under the upper, which slid off it).
+        mass: 0.25,
+        stiffness: k,
+        shear: true,
+        pin: Pin::None,
+        vel: (0.0, 0.0),
+    }
+}
+
+/// The closest pair of particles that no spring joins, and its distance.
+fn closest_unjoined(solver: &Solver) -> (f64, usize, usize) {
+    let x = solver.x();
+    let joined: std::collections::HashSet<(u32, u32)> = solver
+        .state()
+        .springs()
+        .iter()
+        .map(|s| (s.a.min(s.b), s.a.max(s.b)))
+        .collect();
+    let mut best = (f64::INFINITY, 0, 0);
+    for i in 0..x.len() {
+        for j in i + 1..x.len() {
+            let d = (x[i] - x[j]).length();
+            if d < best.0 && !joined.contains(&(i as u32, j as u32)) {
+                best = (d, i, j);
+            }
+        }
+    }
+    best
+}
+
+/// The step each integrator is used with here: the force-based ones at the app's 1e-4 s
+/// (explicit Euler at 2.5e-5 s: with μ = 10 1/s it needs h ω²/2 < μ, and the boxes' ω² is
+/// 3.2e5), the large-step ones at 1/600 s. Contact between particles is discrete: a pair that closes by
+/// more than about r in one step can pass through (the boxes meet at 1 m/s: under 2 mm a step at
+/// 1/600 s, r = 9 mm; at 1/60 s it would be 17 mm).
+fn usual_dt(integrator: Integrator) -> f64 {
+    match integrator {
+        Integrator::ExplicitEuler => 2.5e-5,
+        Integrator::ImplicitEuler | Integrator::ProjectiveDynamics | Integrator::Xpbd => {
+            1.0 / 600.0
+        }
+        _ => 1e-4,
+    }
+}
+
+/// Two soft boxes dropped one onto the other onto the ground, under every integrator at its
+/// usual step: no two particles of different boxes (or of one box, not joined by a spring)
+/// closer than 90 % of 2r at the end of any step, and at rest within 5 s (kinetic energy under
+/// 1e-6 of the potential energy of the drop; XPBD: 1e-3).
+#[test]
+fn two_soft_boxes_stack_and_come_to_rest_under_every_integrator() {
+    let (n, size, r) = (6, 0.1, 0.009);
+    for integrator in Integrator::ALL {
+        let dt = usual_dt(integrator);
+        let mut scene = bare_scene(integrator, dt);
+        scene.gravity = (0.0, -G);
+        scene.ground = Some(0.0);
+        // The app's damping, for every method, so that "at rest within 5 s" asks the same of
+        // them all.
+        scene.damping = 10.0;
+        scene.generate = vec![
+            soft_box(n, size, (0.30, r), 1e4),
+            // Dropped from 0.05 m above the lower box.
+            soft_box(n, size, (0.30, 0.15 + r), 1e4),
+        ];
+        scene.contact = pairs_on(r, 0.5);
+        let mut app = app_with(scene);
+        let steps = (5.0 / dt).round() as u64;
+        let mut nearest = f64::INFINITY;
+        let mut touched = 0;
+        for s in 0..steps {
+            step(&mut app, 1);
+            let (d, i, j) = closest_unjoined(solver(&app));
+            nearest = nearest.min(d);
+            assert!(
+                d >= 0.9 * 2.0 * r,
+                "{integrator:?}: particles {i} and {j} {d} m apart after step {s}, under 90 % of 2r"
+            );
+            touched = touched.max(app.world().resource::<Obstacles>().contacts.pairs);
+        }
+        assert!(touched > 0, "{integrator:?}: the boxes never touched");
+        let s = solver(&app);
+        let mass: f64 = s.state().mass().iter().sum::<f64>() / 2.0;
+        let drop = mass * G * 0.05;
+        let kinetic = s.state().energy(DVec2::new(0.0, -G)).kinetic;
+        // At rest. XPBD keeps 1.2e-4 of the drop's energy (2026-12-03): its velocity is its
+        // last substep's, which the push after the step does not set right; bounded, and the
+        // open part of contact between particles for it.
+        let limit = if integrator == Integrator::Xpbd {
+            1e-3
+        } else {
+            1e-6
+        };
+        assert!(
+            kinetic < limit * drop,
+            "{integrator:?}: kinetic energy {kinetic} J after 5 s, over {limit} of the drop's {drop} J"
+        );
+        // Stacked: the upper box's lowest particle rests on the lower box's top.
+        let upper_lowest = s.x()[n * n..]
+            .iter()
+            .map(|p| p.y)
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            upper_lowest > 0.5 * size,
+            "{integrator:?}: the upper box's lowest particle is at {upper_lowest} m: it fell off"
+        );
+        println!(
+            "{integrator:?}: nearest pair {nearest:.5} m (2r = {}), kinetic {kinetic:.2e} J",
+            2.0 * r
+        );
+    }
+}
+
+/// A strip of cloth (two rows, 96 long) falling on its end onto the ground folds over on
+/// itself; self-collision keeps every pair not joined by a spring at 90 % of 2r or more at
+/// the end of every step, where without it the folds pass through each other.
+#[test]
+fn a_folding_strip_does_not_pass_through_itself() {
+    for (integrator, dt) in [(Integrator::SymplecticEuler, 1e-4)] {
+        let (length, cols) = (0.9, 96);
+        let d = length / (cols - 1) as f64;
+        let r = 0.45 * d;
+        let mut scene = bare_scene(integrator, dt);
+        scene.gravity = (0.0, -G);
+        scene.ground = Some(0.0);
+        scene.damping = 1.0;
+        // Upright, its foot just above the ground, leaning a little so that it folds.
+        scene.generate = vec![Generator::Grid {
+            cols: 2,
+            rows: cols,
+            min: (0.5, r + 0.01),
+            max: (0.5 + d, r + 0.01 + length),
+            mass: 0.01,
+            stiffness: 1e4,
+            shear: true,
+            pin: Pin::None,
+            vel: (0.3, 0.0),
+        }];
+        scene.contact = pairs_on(r, 0.3);
+        let mut app = app_with(scene);
+        let steps = (2.0 / dt).round() as u64;
+        let mut touched = 0;
+        for s in 0..steps {
+            step(&mut app, 1);
+            let (dist, i, j) = closest_unjoined(solver(&app));
+            assert!(
+                dist >= 0.9 * 2.0 * r,
+                "{integrator:?}: particles {i} and {j} {dist} m apart after step {s} (2r = {}) at {} {}, {:?}",
+                2.0 * r,
+                pos(&app, i),
+                pos(&app, j),
+                solver(&app).solve_stats()
+            );
+            touched = touched.max(app.world().resource::<Obstacles>().contacts.pairs);
+        }
+        assert!(
+            touched > 10,
+            "{integrator:?}: the strip never folded onto itself ({touched} pairs)"
+        );
+    }
+}
+
+/// The lists' skin: a body that falls as a whole keeps its neighbour lists (the common shift
+/// is taken out), and one that deforms rebuilds them.
+#[test]
+fn a_falling_body_keeps_its_neighbour_lists() {
+    let mut scene: Scene = bare_scene(Integrator::SymplecticEuler, 1e-4);
+    scene.gravity = (0.0, -G);
+    scene.generate = vec![soft_box(6, 0.1, (0.3, 0.5), 1e4)];
+    scene.contact = pairs_on(0.009, 0.0);
+    let mut app = app_with(scene);
+    step(&mut app, 3000);
+    let builds = solver(&app).solve_stats().pair_list_builds;
+    assert_eq!(
+        builds, 1,
+        "a free fall of 0.3 s rebuilt the lists {builds} times"
+    );
+}
