@@ -419,3 +419,36 @@ fn big_scenes_of_other_sizes_load_over_each_other() {
         );
     }
 }
+
+/// With particle pairs colliding, a radius that puts two particles without a spring closer
+/// than 2r at the start is refused, naming the closest pair and the largest radius that
+/// would do; that radius loads. (A 32² cloth at r = 0.05 went from 5,000 J to 150,000 J in a
+/// second, pushed apart from the first step.)
+#[test]
+fn a_contact_radius_too_large_for_the_scene_is_refused() {
+    let cloth = |r: f64| {
+        format!(
+            "(gravity: (0.0, -9.8), damping: 10.0, ground: Some(0.0), integrator: SymplecticEuler,
+              dt: 0.0001,
+              generate: [Grid(cols: 32, rows: 32, min: (0.0, 0.0), max: (1.0, 1.0), mass: 1.0,
+                              stiffness: 10000.0, shear: true, pin: First)],
+              contact: Some((radius: {r}, particles: true)))"
+        )
+    };
+    let message = match parse(&cloth(0.05)) {
+        Err(e @ SceneError::Invalid { .. }) => e.to_string(),
+        other => panic!("expected an invalid scene, got {other:?}"),
+    };
+    // The nearest pairs without a spring are two spacings apart: 2/31 m.
+    let two_spacings = 2.0 / 31.0;
+    assert!(
+        message.contains("contact.radius")
+            && message.contains(&format!("{two_spacings:.4} m apart"))
+            && message.contains(&format!("at most {:.4}", two_spacings / 2.0)),
+        "{message}"
+    );
+    assert!(parse(&cloth(0.99 * two_spacings / 2.0)).is_ok());
+    // Without particle pairs the same radius is only the obstacles' and the ground's.
+    let points = cloth(0.05).replace("particles: true", "particles: false");
+    assert!(parse(&points).is_ok());
+}
