@@ -447,6 +447,10 @@ fn integrate(
         ground: clamped_ground(&params),
         iterations: params.iterations,
         cg: settings.0,
+        pair_radius: params
+            .contact
+            .filter(|c| c.particles && c.radius > 0.0)
+            .map(|c| c.radius),
     };
     let s = &mut *solver;
     if let Err(e) = step::integrate(&mut s.state, &mut s.work, &method, &threads) {

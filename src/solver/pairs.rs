@@ -32,6 +32,11 @@
 //! velocity goes through [`respond`], each particle taking its share. Every particle writes
 //! only itself (into a buffer written back after the pass), and only the particles with listed
 //! neighbours are visited, so the passes split over threads and cost what the contacts cost.
+//!
+//! **XPBD** also gets one Jacobi pass after each substep's sweeps (`Pairs::push_apart`, on
+//! one thread while the others wait), so that the push enters the next substep's velocity as
+//! the constraints' corrections do; implicit Euler and projective dynamics take the push of
+//! the pass after the step into their velocity.
 
 use super::obstacle::{SLOP, Surface, respond};
 use super::parallel::Threads;
@@ -180,6 +185,61 @@ impl Pairs {
             contacts: pushed.max(touching),
             listed,
         }
+    }
+
+    /// Readies the lists for a solver that pushes pairs apart inside its own iterations
+    /// (XPBD's substeps, [`Self::push_apart`]): built, if stale, with a skin that also covers
+    /// how far two particles can close during the step (twice the fastest speed, and gravity's
+    /// share, over dt). Returns whether any pair is listed.
+    pub(crate) fn ready_for_step(
+        &mut self,
+        s: &State,
+        radius: f64,
+        dt: f64,
+        gravity: f64,
+        threads: &Threads,
+    ) -> bool {
+        let n = s.x.len();
+        if radius <= 0.0 || n < 2 {
+            return false;
+        }
+        if self.ids.len() != n {
+            self.ids = (0..n as u32).collect();
+        }
+        self.adjacency(s);
+        let fastest = s.v.iter().fold(0.0f64, |m, v| m.max(v.length()));
+        let closing = 2.0 * (fastest * dt + gravity * dt * dt);
+        let skin = Self::skin(radius) + 2.0 * closing;
+        let reach = 2.0 * radius + skin;
+        if self.stale(s, reach, threads) || self.skin < skin {
+            self.skin = skin;
+            self.build(&s.x, reach, s.revision, threads, s.springs.len());
+        }
+        !self.active.is_empty()
+    }
+
+    /// One serial Jacobi pass over the listed pairs of positions `x` (inverse masses `w`),
+    /// contact distance `contact`, with `out` as scratch of the active particles' length: for a
+    /// solver's own iterations, on one thread while the others wait.
+    pub(crate) fn push_apart(&self, x: &mut [DVec2], w: &[f64], contact: f64, out: &mut [DVec2]) {
+        for ((o, &i), &(a, b)) in out.iter_mut().zip(&self.active).zip(&self.active_span) {
+            *o = pushed(
+                i as usize,
+                x,
+                w,
+                &self.list[a as usize..b as usize],
+                contact,
+            )
+            .0;
+        }
+        for (&i, o) in self.active.iter().zip(out.iter()) {
+            x[i as usize] = *o;
+        }
+    }
+
+    /// Particles with listed neighbours.
+    pub(crate) fn active_count(&self) -> usize {
+        self.active.len()
     }
 
     /// Position iterations per step, once the pass has run.
@@ -348,39 +408,12 @@ impl Pairs {
                 let (mut touching, mut deepest) = (0, 0.0f64);
                 for ((o, &i), &(a, b)) in out.iter_mut().zip(active).zip(span) {
                     let i = i as usize;
-                    let wi = w[i];
-                    let mut push = DVec2::ZERO;
-                    let mut count = 0u32;
-                    for &j in &list[a as usize..b as usize] {
-                        let j = j as usize;
-                        let d = x[i] - x[j];
-                        let dist2 = d.length_squared();
-                        if dist2 >= contact * contact {
-                            continue;
-                        }
-                        let dist = dist2.sqrt();
-                        deepest = deepest.max(contact - dist);
-                        touching += 1;
-                        let wsum = wi + w[j];
-                        if wi == 0.0 || wsum == 0.0 {
-                            continue;
-                        }
-                        let n = if dist > 0.0 {
-                            d / dist
-                        } else if i < j {
-                            DVec2::X
-                        } else {
-                            DVec2::NEG_X
-                        };
-                        push += n * ((contact - dist) * wi / wsum);
-                        count += 1;
-                    }
-                    *o = if count > 0 {
-                        let share = (RELAXATION / count as f64).min(1.0);
-                        keep_out(x[i] + push * share)
-                    } else {
-                        x[i]
-                    };
+                    let (to, t, d) = pushed(i, x, w, &list[a as usize..b as usize], contact);
+                    // Only a particle the pass moved (the obstacles' own pass, swept, handles
+                    // the rest).
+                    *o = if to != x[i] { keep_out(to) } else { to };
+                    touching += t;
+                    deepest = deepest.max(d);
                 }
                 (touching, deepest)
             },
@@ -444,4 +477,48 @@ impl Pairs {
         }
         pairs
     }
+}
+
+/// Where particle `i` goes in one Jacobi pass: its inverse-mass share of each overlap with
+/// `neighbours`, averaged over those contacts with over-relaxation; with how many of them touch
+/// it and the deepest overlap.
+fn pushed(
+    i: usize,
+    x: &[DVec2],
+    w: &[f64],
+    neighbours: &[u32],
+    contact: f64,
+) -> (DVec2, usize, f64) {
+    let wi = w[i];
+    let (mut push, mut count, mut touching, mut deepest) = (DVec2::ZERO, 0u32, 0, 0.0f64);
+    for &j in neighbours {
+        let j = j as usize;
+        let d = x[i] - x[j];
+        let dist2 = d.length_squared();
+        if dist2 >= contact * contact {
+            continue;
+        }
+        let dist = dist2.sqrt();
+        deepest = deepest.max(contact - dist);
+        touching += 1;
+        let wsum = wi + w[j];
+        if wi == 0.0 || wsum == 0.0 {
+            continue;
+        }
+        let n = if dist > 0.0 {
+            d / dist
+        } else if i < j {
+            DVec2::X
+        } else {
+            DVec2::NEG_X
+        };
+        push += n * ((contact - dist) * wi / wsum);
+        count += 1;
+    }
+    let to = if count > 0 {
+        x[i] + push * (RELAXATION / count as f64).min(1.0)
+    } else {
+        x[i]
+    };
+    (to, touching, deepest)
 }

@@ -216,6 +216,9 @@ pub struct Method {
     pub iterations: Iterations,
     /// Implicit Euler's solve.
     pub cg: CgSettings,
+    /// The contact radius when particle pairs collide: XPBD pushes pairs apart inside its
+    /// substeps too, as it treats the ground.
+    pub pair_radius: Option<f64>,
 }
 
 /// Pass 2: the integrator's update (the Euler methods' [`kick`], or the method's solve).
@@ -243,7 +246,8 @@ pub fn integrate(
         }
         Integrator::Xpbd => {
             let (n, sweeps) = (it.xpbd_substeps, it.xpbd_sweeps);
-            xpbd::step(s, &mut w.xpbd, dt, n, sweeps, m.ground, threads)
+            let pairs = m.pair_radius.map(|r| (&mut w.pairs, r));
+            xpbd::step(s, &mut w.xpbd, dt, (n, sweeps), m.ground, pairs, threads)
         }
     }
     Ok(())

@@ -23,6 +23,7 @@
 //! thread. (Jacobi with averaging would need no colouring, but it converges more slowly, by a
 //! factor that grows with the number of constraints on a particle.)
 
+use super::pairs::Pairs;
 use super::parallel::Threads;
 use super::state::State;
 use super::team::Shared;
@@ -404,9 +405,9 @@ pub fn step(
     s: &mut State,
     xp: &mut Xpbd,
     dt: f64,
-    substeps: u32,
-    sweeps: u32,
+    (substeps, sweeps): (u32, u32),
     ground: Option<f64>,
+    pairs: Option<(&mut Pairs, f64)>,
     threads: &Threads,
 ) {
     s.drift_buffer();
@@ -423,6 +424,20 @@ pub fn step(
     let inv_hs = 1.0 / hs;
     let floor = ground.unwrap_or(f64::NEG_INFINITY);
     xp.prepare(s, hs);
+    // Particle pairs, pushed apart after each substep's sweeps on one member while the others
+    // wait (the pass is short: only the particles with listed neighbours), so that the push
+    // enters the next substep's velocity as the constraints' do.
+    let gravity =
+        s.f.iter()
+            .zip(&s.inv_mass)
+            .fold(0.0f64, |m, (f, w)| m.max(f.length() * w));
+    let pairs = pairs.and_then(|(p, r)| {
+        p.ready_for_step(s, r, dt, gravity, threads)
+            .then_some((&*p, 2.0 * r))
+    });
+    let mut scratch = vec![DVec2::ZERO; pairs.map_or(0, |(p, _)| p.active_count())];
+    let scratch_len = scratch.len();
+    let scratch = Shared::new(&mut scratch);
     // The pool's threads run the substeps together as one team (a fork and a join per colour
     // cost as much as a colour's work at 64²). Between two barriers the members write
     // disjoint elements: their own particles in the prediction, their own constraints'
@@ -480,6 +495,15 @@ pub fn step(
                     }
                     team.wait();
                 }
+            }
+            if let Some((pairs, contact)) = pairs {
+                // One member: the one whose share of a single item is not empty.
+                if !team.share(0..1).is_empty() {
+                    // SAFETY: the other members wait at the barrier below, touching nothing.
+                    let (x, out) = unsafe { (positions.part(0..n), scratch.part(0..scratch_len)) };
+                    pairs.push_apart(x, w, contact, out);
+                }
+                team.wait();
             }
         }
     });
@@ -581,7 +605,7 @@ mod tests {
                 .collect();
             let mut worst: f64 = 0.0;
             for _ in 0..120 {
-                step(&mut s, &mut xp, dt, 20, 200, None, &threads);
+                step(&mut s, &mut xp, dt, (20, 200), None, None, &threads);
                 for i in 0..s.x.len() {
                     s.x[i] += s.drift[i] * dt;
                 }
