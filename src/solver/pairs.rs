@@ -59,12 +59,11 @@ const TOLERANCE: f64 = 0.01;
 /// The particle-pair contact's lists and buffers, kept from step to step.
 #[derive(Debug, Default)]
 pub struct Pairs {
-    /// Each particle's listed neighbours: `list[span.0..span.1]`.
-    span: Vec<(u32, u32)>,
+    /// The listed neighbours, each active particle's at `list[active_span.0..active_span.1]`.
     list: Vec<u32>,
     /// Positions at the last build.
     reference: Vec<DVec2>,
-    /// What the lists were built for: particles, spring-graph revision, reach.
+    /// What the lists were built for: particles, spring-graph revision, contact radius.
     built: Option<(usize, u64, f64)>,
     /// Spring neighbours of each particle, sorted: `adjacent[adjacency_span.0..]`.
     adjacency_span: Vec<(u32, u32)>,
@@ -99,9 +98,9 @@ pub struct PairReport {
 }
 
 impl Pairs {
-    /// The skin for contact radius r: a tenth of it is added to the lists' reach for every
-    /// rebuild it saves; r itself (cells of 3r) kept the 256² cloth's lists for tens of steps
-    /// at dt = 1e-4 s while they stayed short.
+    /// The skin for contact radius r: a wider one keeps the lists longer but lists more pairs;
+    /// r itself (cells of 3r) kept the 256² cloth's lists for tens of steps at dt = 1e-4 s
+    /// while they stayed short.
     pub fn skin(radius: f64) -> f64 {
         radius
     }
@@ -127,8 +126,6 @@ impl Pairs {
         }
         self.steps += 1;
         let springs = s.springs.len();
-        let skin = Self::skin(radius);
-        let reach = 2.0 * radius + skin;
         if self.ids.len() != n {
             self.ids = (0..n as u32).collect();
         }
@@ -144,9 +141,15 @@ impl Pairs {
         // The iterations move particles too, by up to an overlap: when that leaves the lists
         // stale they are built again and the iterations go on with them (once).
         for _ in 0..2 {
-            if self.stale(s, reach, threads) {
-                self.skin = skin;
-                self.build(&s.x, reach, s.revision, threads, springs);
+            if self.stale(s, radius, threads) {
+                self.build(
+                    &s.x,
+                    radius,
+                    Self::skin(radius),
+                    s.revision,
+                    threads,
+                    springs,
+                );
             }
             if self.list.is_empty() {
                 break;
@@ -161,7 +164,7 @@ impl Pairs {
                     break;
                 }
             }
-            if !moved || !self.stale(s, reach, threads) {
+            if !moved || !self.stale(s, radius, threads) {
                 break;
             }
         }
@@ -189,14 +192,15 @@ impl Pairs {
 
     /// Readies the lists for a solver that pushes pairs apart inside its own iterations
     /// (XPBD's substeps, [`Self::push_apart`]): built, if stale, with a skin that also covers
-    /// how far two particles can close during the step (twice the fastest speed, and gravity's
-    /// share, over dt). Returns whether any pair is listed.
+    /// how far two particles can close during the step (twice the fastest speed over dt, and
+    /// the body forces' largest acceleration `accel` over dt²). Returns whether any pair is
+    /// listed.
     pub(crate) fn ready_for_step(
         &mut self,
         s: &State,
         radius: f64,
         dt: f64,
-        gravity: f64,
+        accel: f64,
         threads: &Threads,
     ) -> bool {
         let n = s.x.len();
@@ -208,12 +212,10 @@ impl Pairs {
         }
         self.adjacency(s);
         let fastest = s.v.iter().fold(0.0f64, |m, v| m.max(v.length()));
-        let closing = 2.0 * (fastest * dt + gravity * dt * dt);
+        let closing = 2.0 * (fastest * dt + accel * dt * dt);
         let skin = Self::skin(radius) + 2.0 * closing;
-        let reach = 2.0 * radius + skin;
-        if self.stale(s, reach, threads) || self.skin < skin {
-            self.skin = skin;
-            self.build(&s.x, reach, s.revision, threads, s.springs.len());
+        if self.stale(s, radius, threads) || self.skin < skin {
+            self.build(&s.x, radius, skin, s.revision, threads, s.springs.len());
         }
         !self.active.is_empty()
     }
@@ -280,9 +282,10 @@ impl Pairs {
     }
 
     /// Whether the lists may miss a touching pair: built for other particles, springs or
-    /// reach, or the displacements since, less their common shift, reach half the skin.
-    fn stale(&self, s: &State, reach: f64, threads: &Threads) -> bool {
-        if self.built != Some((s.x.len(), s.revision, reach)) {
+    /// radius, or the displacements since, less their common shift, reach half the skin (a
+    /// skin wider than the radius's own, built for XPBD's substeps, is kept while it holds).
+    fn stale(&self, s: &State, radius: f64, threads: &Threads) -> bool {
+        if self.built != Some((s.x.len(), s.revision, radius)) {
             return true;
         }
         let (lo, hi) = threads.chunked(
@@ -305,10 +308,20 @@ impl Pairs {
         half_diagonal.is_nan() || half_diagonal > 0.5 * self.skin
     }
 
-    /// Lists every pair within `reach`, not excluded, through a spatial hash of cells `reach`
-    /// wide.
-    fn build(&mut self, x: &[DVec2], reach: f64, revision: u64, threads: &Threads, springs: usize) {
+    /// Lists every pair within `reach` = 2r + `skin`, not excluded, through a spatial hash of
+    /// cells `reach` wide.
+    fn build(
+        &mut self,
+        x: &[DVec2],
+        radius: f64,
+        skin: f64,
+        revision: u64,
+        threads: &Threads,
+        springs: usize,
+    ) {
         self.rebuilds += 1;
+        self.skin = skin;
+        let reach = 2.0 * radius + skin;
         let n = x.len();
         let table = (2 * n).next_power_of_two();
         let cell = |p: DVec2| ((p.x / reach).floor() as i64, (p.y / reach).floor() as i64);
@@ -380,11 +393,10 @@ impl Pairs {
                 self.active_span.push((a, b));
             }
         }
-        self.span = spans;
         self.list = list;
         self.reference.clear();
         self.reference.extend_from_slice(x);
-        self.built = Some((n, revision, reach));
+        self.built = Some((n, revision, radius));
     }
 
     /// One Jacobi iteration on positions, over the particles with listed neighbours. Returns

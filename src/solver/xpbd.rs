@@ -427,12 +427,10 @@ pub fn step(
     // Particle pairs, pushed apart after each substep's sweeps on one member while the others
     // wait (the pass is short: only the particles with listed neighbours), so that the push
     // enters the next substep's velocity as the constraints' do.
-    let gravity =
-        s.f.iter()
-            .zip(&s.inv_mass)
-            .fold(0.0f64, |m, (f, w)| m.max(f.length() * w));
     let pairs = pairs.and_then(|(p, r)| {
-        p.ready_for_step(s, r, dt, gravity, threads)
+        // The strongest body-force acceleration, for how far pairs can close in the step.
+        let accel = (s.f.iter().zip(&s.inv_mass)).fold(0.0f64, |m, (f, w)| m.max(f.length() * w));
+        p.ready_for_step(s, r, dt, accel, threads)
             .then_some((&*p, 2.0 * r))
     });
     let mut scratch = vec![DVec2::ZERO; pairs.map_or(0, |(p, _)| p.active_count())];
