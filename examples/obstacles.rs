@@ -46,6 +46,8 @@ fn main() {
             shear: true,
             pin: Pin::None,
             vel: (0.0, 0.0),
+            damping: None,
+            plastic: None,
         }],
         contact: Some(ContactSettings {
             radius: 0.005,

@@ -144,9 +144,13 @@ struct RunArgs {
     /// Stiffness for every spring, N/m.
     #[arg(long)]
     stiffness: Option<f64>,
-    /// Damping rate μ, 1/s (overrides the scene's).
+    /// Damping rate μ, 1/s (overrides the scene's): air drag, which slows every motion.
     #[arg(long)]
     damping: Option<f64>,
+    /// Dashpot c along every spring without its own, N·s/m (overrides the scene's
+    /// `spring_damping`): damps the springs' vibration, not free fall.
+    #[arg(long, value_name = "C")]
+    spring_damping: Option<f64>,
     /// Tearing: break springs stretched past (1 + STRAIN) × rest (overrides the scene's).
     #[arg(long, value_name = "STRAIN")]
     tear: Option<f64>,
@@ -235,6 +239,7 @@ fn run(args: RunArgs) -> ExitCode {
         dt: args.dt,
         stiffness: args.stiffness,
         damping: args.damping,
+        spring_damping: args.spring_damping,
         tear: args.tear,
         newton_iterations: args.newton_iterations,
         pd_iterations: args.pd_iterations,

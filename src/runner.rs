@@ -28,6 +28,9 @@ pub struct Overrides {
     pub stiffness: Option<f64>,
     /// Damping rate μ, 1/s (overrides the scene's).
     pub damping: Option<f64>,
+    /// The dashpot c of every spring without its own, N·s/m (overrides the scene's
+    /// `spring_damping`).
+    pub spring_damping: Option<f64>,
     /// Tearing strain (overrides the scene's `tear`).
     pub tear: Option<f64>,
     /// Implicit Euler's Newton steps per step (overrides the scene's).
@@ -58,6 +61,12 @@ impl Overrides {
         }
         if let Some(mu) = self.damping.filter(|m| !(m.is_finite() && *m >= 0.0)) {
             return Err(format!("--damping must be finite and >= 0, got {mu}"));
+        }
+        if let Some(c) = self
+            .spring_damping
+            .filter(|c| !(c.is_finite() && *c >= 0.0))
+        {
+            return Err(format!("--spring-damping must be finite and >= 0, got {c}"));
         }
         if let Some(s) = self.tear.filter(|s| !(s.is_finite() && *s > 0.0)) {
             return Err(format!("--tear must be finite and > 0, got {s}"));
@@ -128,6 +137,10 @@ pub struct RunReport {
     pub stable_dt: Option<f64>,
     /// Gershgorin upper bound on ω_max, rad/s.
     pub omega_max_bound: f64,
+    /// The dashpots' damping rate of the fastest mode, (c/k)_max ω_max², 1/s; absent without
+    /// dashpots.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dashpot_rate: Option<f64>,
     /// Whether every step stayed finite (and the energy watch, when on, never stopped it).
     pub finite: bool,
     /// Springs broken by tearing during the run (0 when tearing is off).
@@ -218,6 +231,9 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
         if let Some(mu) = overrides.damping {
             p.damping = mu;
         }
+        if let Some(c) = overrides.spring_damping {
+            p.spring_damping = c;
+        }
         p.stiffness_override = overrides.stiffness;
         if overrides.tear.is_some() {
             p.tear = overrides.tear;
@@ -290,6 +306,7 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
             .is_finite()
             .then_some(stability.stable_dt),
         omega_max_bound: stability.omega_bound,
+        dashpot_rate: (stability.dashpot_rate > 0.0).then_some(stability.dashpot_rate),
         finite: blowup_step.is_none() && solver.state_is_finite(),
         springs_torn: world.resource::<sim::Tearing>().torn,
         contacts: world.resource::<sim::Obstacles>().contacts.total(),

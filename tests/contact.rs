@@ -228,6 +228,8 @@ fn friction_stops_a_sliding_box() {
             shear: true,
             pin: hooke::scene::Pin::None,
             vel: (0.5, 0.0),
+            damping: None,
+            plastic: None,
         }];
         scene.contact = contact;
         let mut app = app_with(scene);

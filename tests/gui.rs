@@ -528,17 +528,17 @@ fn every_control_works_under_real_input_and_the_log_stays_quiet() {
     // The panel's tearing field takes a typed percentage: 30 is a strain of 0.3 (it was read
     // as 30, 3000 %, and clamped to 200 %). The row's place is the empty scene's panel
     // layout, under the contact rows.
-    s.move_px(95, 326);
+    s.move_px(95, 347);
     s.x(&["click", "1"]);
     s.expect("tearing on", |st| st["tear"] == 0.6);
-    s.move_px(242, 326);
+    s.move_px(242, 347);
     s.x(&["click", "1"]);
     std::thread::sleep(Duration::from_millis(300));
     s.x(&["windowfocus", "--sync", &s.window]);
     s.x(&["type", "--delay", "80", "30"]);
     s.key("Return");
     s.expect("30 % typed", |st| st["tear"] == 0.3);
-    s.move_px(95, 326);
+    s.move_px(95, 347);
     s.x(&["click", "1"]);
     s.expect("tearing off", |st| st["tear"].is_null());
 
@@ -756,6 +756,20 @@ fn every_control_works_under_real_input_and_the_log_stays_quiet() {
     s.expect("the delete undone", |st| built(st) == 3);
     s.key("ctrl+shift+z");
     s.expect("the delete redone", |st| built(st) == 2);
+    // J + drag draws a ball: a ring of particles, one spring per edge, filled with gas; undo
+    // takes it away whole.
+    let (n0, m0, _) = counts(&s.status());
+    s.x(&["windowfocus", "--sync", &s.window]);
+    s.x(&["keydown", "j"]);
+    s.drag("1", (0.6, 0.7), (0.68, 0.7), 5);
+    s.x(&["keyup", "j"]);
+    let ball = s.expect("a ball drawn", |st| counts(st).0 > n0);
+    let (n1, m1, _) = counts(&ball);
+    assert!(n1 - n0 >= 8 && m1 - m0 == n1 - n0, "{:?}", counts(&ball));
+    s.key("ctrl+z");
+    s.expect("the ball undone", |st| {
+        counts(st).0 == n0 && counts(st).1 == m0
+    });
     s.key("g");
     s.expect("running again", |st| st["paused"] == false);
 

@@ -86,12 +86,16 @@ fn with(scene: &Scene, integrator: Integrator) -> Scene {
     }
 }
 
-#[test]
-fn stiffness_sweep_across_the_limit_on_the_cloth() {
-    let cloth = hard("cloth_light");
+/// Runs `scene(integrator, value)` (a scene and its stiffness override) for each value under
+/// every integrator, each run checked against the prediction by [`run`]; returns how many
+/// integrators' sweeps had runs on both sides of their limit.
+fn sweep(
+    name: &str,
+    values: &[f64],
+    scene: impl Fn(Integrator, f64) -> (Scene, Option<f64>),
+) -> usize {
     let mut crossed = 0;
     for integrator in Integrator::ALL {
-        let mut predicted = vec![];
         // Explicit Euler just past its limit grows the fastest mode by well under 1 % a step,
         // from round-off: it needs more steps to show.
         let steps = if integrator == Integrator::ExplicitEuler {
@@ -99,19 +103,47 @@ fn stiffness_sweep_across_the_limit_on_the_cloth() {
         } else {
             3000
         };
-        for k in [1e2, 1e3, 1e4, 1e5, 1e6, 1e7] {
-            let what = format!("{integrator}, k = {k:e}");
-            let (_, o) = run(&what, with(&cloth, integrator), Some(k), steps);
-            predicted.push((k, o.margin, o.status == SimStatus::Running));
+        let mut predicted = vec![];
+        for &value in values {
+            let (scene, stiffness) = scene(integrator, value);
+            let what = format!("{integrator}, {name} = {value:e}");
+            let (_, o) = run(&what, scene, stiffness, steps);
+            predicted.push((value, o.margin, o.status == SimStatus::Running));
         }
-        println!("{integrator}: (k, h·ω/limit, stable) {predicted:.2?}");
+        println!("{integrator}: ({name}, h·ω/limit, stable) {predicted:.2?}");
         if predicted.iter().any(|p| p.1 < STABLE_BELOW)
             && predicted.iter().any(|p| p.1 > UNSTABLE_ABOVE)
         {
             crossed += 1;
         }
     }
+    crossed
+}
+
+#[test]
+fn stiffness_sweep_across_the_limit_on_the_cloth() {
+    let cloth = hard("cloth_light");
+    let ks = [1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7];
+    let crossed = sweep("k", &ks, |i, k| (with(&cloth, i), Some(k)));
     // The sweep crosses the limit for every conditionally stable method.
+    assert_eq!(crossed, 4);
+}
+
+/// Dashpots bring the explicit methods' limit in (their damping rate γ = (c/k)ω² must stay
+/// below about 2/h): on the light cloth at k = 1e3, far inside the undamped limit, a sweep of
+/// the dashpot c from 1 to 300 N·s/m crosses the estimate's limit for every explicit method,
+/// and the runs do what the estimate says on both sides of it.
+#[test]
+fn dashpot_sweep_across_the_limit_on_the_cloth() {
+    let cloth = hard("cloth_light");
+    let cs = [1.0, 3.0, 10.0, 30.0, 100.0, 300.0];
+    let crossed = sweep("c", &cs, |i, c| {
+        let scene = Scene {
+            spring_damping: c,
+            ..with(&cloth, i)
+        };
+        (scene, Some(1e3))
+    });
     assert_eq!(crossed, 4);
 }
 

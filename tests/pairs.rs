@@ -33,6 +33,8 @@ fn soft_box(n: usize, size: f64, at: (f64, f64), k: f64) -> Generator {
         shear: true,
         pin: Pin::None,
         vel: (0.0, 0.0),
+        damping: None,
+        plastic: None,
     }
 }
 
@@ -168,6 +170,8 @@ fn a_folding_strip_does_not_pass_through_itself() {
             shear: true,
             pin: Pin::None,
             vel: (0.3, 0.0),
+            damping: None,
+            plastic: None,
         }];
         scene.contact = pairs_on(r, 0.3);
         let mut app = app_with(scene);

@@ -28,6 +28,9 @@ fn systems_for_unused_features_do_not_run() {
             sweeps: 250,
             tear: 0,
             contact: 0,
+            materials: 0,
+            actuate: 0,
+            yield_springs: 0,
         }
     );
 

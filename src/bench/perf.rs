@@ -46,6 +46,8 @@ pub fn cloth(w: usize) -> Scene {
             shear: true,
             pin: Pin::First,
             vel: (0.0, 0.0),
+            damping: None,
+            plastic: None,
         }],
         ..Scene::default()
     }

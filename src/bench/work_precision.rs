@@ -5,6 +5,10 @@
 //! * `cloth32`: the 32×32 cloth (k = 1e4) without damping and ground, released from rest.
 //!   T = 0.4 s. No closed form: the reference is RK4 at a step 8× below the smallest swept, shown
 //!   converged by comparing it with RK4 at half that step.
+//! * `cloth32-damped`: the same cloth with a dashpot of c = 5 N·s/m along every spring
+//!   ([`DAMPED_CLOTH_DASHPOT`]), so that the diagram covers the damping term: c/k = 5e-4 s
+//!   damps the fastest mode (ω ≈ 280 rad/s) at γ = (c/k)ω² ≈ 40 /s and the slow swing hardly
+//!   at all. Same T, sweep and reference.
 //!
 //! Error: the largest distance of any particle from the reference over 10 evenly spaced
 //! checkpoints up to T (so that a method cannot look good by meeting the solution at T only).
@@ -68,6 +72,7 @@ pub struct Problem {
     reference: Reference,
 }
 
+#[derive(Clone, Copy)]
 enum Reference {
     Exact(fn(f64) -> Vec<DVec2>),
     /// RK4 at this dt (and, to show it converged, at half of it).
@@ -83,6 +88,9 @@ pub struct Report {
 }
 
 const OMEGA: f64 = 100.0;
+
+/// The dashpot of every spring of `cloth32-damped`, N·s/m.
+pub const DAMPED_CLOTH_DASHPOT: f64 = 5.0;
 
 fn oscillator_exact(t: f64) -> Vec<DVec2> {
     vec![
@@ -116,18 +124,18 @@ pub fn problems(quick: bool) -> Vec<Problem> {
             pinned: false,
         },
     ];
-    osc.springs = vec![crate::scene::SpringDef {
-        a: 0,
-        b: 1,
-        stiffness: OMEGA * OMEGA,
-        rest: 0.5,
-    }];
+    osc.springs = vec![crate::scene::SpringDef::new(0, 1, 0.5, OMEGA * OMEGA)];
     let mut cloth = presets::resolve("cloth32")
         .map(|l| l.scene)
         .unwrap_or_default();
     cloth.damping = 0.0;
     cloth.ground = None;
+    let damped = Scene {
+        spring_damping: DAMPED_CLOTH_DASHPOT,
+        ..cloth.clone()
+    };
     let (n_osc, n_cloth) = if quick { (5, 4) } else { (9, 7) };
+    let cloth_reference = Reference::Rk4(4e-3 / f64::powi(2.0, n_cloth as i32 + 2));
     vec![
         Problem {
             name: "oscillator",
@@ -141,7 +149,14 @@ pub fn problems(quick: bool) -> Vec<Problem> {
             scene: cloth,
             t_end: 0.4,
             dts: sweep(4e-3, n_cloth),
-            reference: Reference::Rk4(4e-3 / f64::powi(2.0, n_cloth as i32 + 2)),
+            reference: cloth_reference,
+        },
+        Problem {
+            name: "cloth32-damped",
+            scene: damped,
+            t_end: 0.4,
+            dts: sweep(4e-3, n_cloth),
+            reference: cloth_reference,
         },
     ]
 }

@@ -12,8 +12,11 @@ use serde::{Deserialize, Serialize};
 pub struct Scene {
     /// Gravitational acceleration (x, y), m/s².
     pub gravity: (f64, f64),
-    /// Velocity damping rate μ, 1/s (0 = off).
+    /// Velocity damping rate μ, 1/s (0 = off): air drag, which slows every motion alike.
     pub damping: f64,
+    /// The dashpot c (N·s/m) of every spring without a `damping` of its own; default 0 (off).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub spring_damping: f64,
     /// Height of the ground; `None` = no ground.
     pub ground: Option<f64>,
     /// The time integrator.
@@ -52,6 +55,47 @@ pub struct Scene {
     /// `None` keeps the assignment's ground: points, clamped, frictionless.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub contact: Option<crate::sim::ContactSettings>,
+    /// Gas-filled loops of explicit or generated particles (a `Ring` generator adds its own).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub pressure: Vec<PressureDef>,
+}
+
+/// A closed loop of particles filled with gas: `pressure: [(particles: [0, 1, 2, 3], nrt: 20.0)]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PressureDef {
+    /// The loop's particles by index, in order around it (either way round).
+    pub particles: Vec<usize>,
+    /// nRT, N·m: the pressure at area A is nRT/A.
+    pub nrt: f64,
+}
+
+/// A muscle's oscillation: the rest length is L₀ (1 + amplitude · sin(2π frequency t + phase)).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Actuation {
+    /// A, a fraction of L₀.
+    pub amplitude: f64,
+    /// f, Hz.
+    pub frequency: f64,
+    /// φ, rad; default 0.
+    #[serde(default)]
+    pub phase: f64,
+}
+
+/// Plasticity: past a strain `yield`, the rest length creeps toward the length at `rate`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Plasticity {
+    /// ε_y, the strain |l − L|/L past which the spring yields.
+    #[serde(rename = "yield")]
+    pub yield_strain: f64,
+    /// r, 1/s.
+    pub rate: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 /// An obstacle as written in a scene: a shape where it stands (it does not move unless a
@@ -185,6 +229,35 @@ pub struct SpringDef {
     pub stiffness: f64,
     /// Rest length, m.
     pub rest: f64,
+    /// Its dashpot c, N·s/m; default: the scene's `spring_damping`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
+    /// A muscle: its rest length oscillates.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub actuation: Option<Actuation>,
+    /// Plastic: its rest length yields.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plastic: Option<Plasticity>,
+}
+
+impl SpringDef {
+    /// A plain Hooke spring.
+    pub fn new(a: usize, b: usize, rest: f64, stiffness: f64) -> SpringDef {
+        SpringDef {
+            a,
+            b,
+            stiffness,
+            rest,
+            damping: None,
+            actuation: None,
+            plastic: None,
+        }
+    }
+
+    /// Whether it has a material beyond the Hooke spring.
+    pub fn has_material(&self) -> bool {
+        self.damping.is_some() || self.actuation.is_some() || self.plastic.is_some()
+    }
 }
 
 /// Parametric particle layouts.
@@ -219,6 +292,35 @@ pub enum Generator {
         #[serde(default)]
         /// Initial velocity of every free particle (x, y), m/s.
         vel: (f64, f64),
+        /// Every spring's dashpot c, N·s/m; default: the scene's `spring_damping`.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        damping: Option<f64>,
+        /// Every spring plastic.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        plastic: Option<Plasticity>,
+    },
+    /// A ring of `segments` particles around `center`, joined neighbour to neighbour, listed
+    /// counter-clockwise from angle 0; with `pressure` > 0, a gas of nRT = `pressure` (N·m)
+    /// fills it. The springs are at rest at `radius`, so the gas inflates it past that.
+    Ring {
+        /// The centre (x, y), m.
+        center: (f64, f64),
+        /// The radius at which the springs are at rest, m.
+        radius: f64,
+        /// Particles (and springs) around the ring; at least 3.
+        segments: usize,
+        #[serde(default = "default_mass")]
+        /// Mass of each particle, kg.
+        mass: f64,
+        #[serde(default = "default_stiffness")]
+        /// Stiffness of each spring, N/m.
+        stiffness: f64,
+        /// nRT of the gas inside, N·m; 0 = no gas.
+        #[serde(default)]
+        pressure: f64,
+        /// Every spring's dashpot c, N·s/m; default: the scene's `spring_damping`.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        damping: Option<f64>,
     },
     /// `segments` springs in a straight line from `from` to `to` (segments + 1 particles).
     Chain {
@@ -250,6 +352,8 @@ pub enum Pin {
     First,
     /// A grid's two top corners; a chain's two ends.
     Ends,
+    /// A grid's left column (a cantilever); a chain's first particle.
+    Left,
 }
 
 /// What a left click adds: a particle joined to every particle within `radius`.
@@ -301,6 +405,7 @@ impl Default for Scene {
         Scene {
             gravity: (p.gravity.x, p.gravity.y),
             damping: p.damping,
+            spring_damping: p.spring_damping,
             ground: p.ground,
             integrator: p.integrator,
             dt: p.dt,
@@ -313,6 +418,7 @@ impl Default for Scene {
             iterations: p.iterations,
             obstacles: vec![],
             contact: p.contact,
+            pressure: vec![],
         }
     }
 }

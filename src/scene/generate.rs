@@ -16,6 +16,8 @@ pub struct Expanded {
     pub particles: Vec<ParticleDef>,
     /// Explicit then generated springs, by particle index.
     pub springs: Vec<SpringDef>,
+    /// Explicit then generated gas-filled loops.
+    pub pressure: Vec<PressureDef>,
 }
 
 impl Scene {
@@ -24,7 +26,41 @@ impl Scene {
         Expanded {
             particles: self.particle_defs().collect(),
             springs: self.spring_defs().collect(),
+            pressure: self.pressure_defs(),
         }
+    }
+
+    /// The scene's gas-filled loops: its `pressure` entries, then each ring's with gas.
+    pub fn pressure_defs(&self) -> Vec<PressureDef> {
+        let mut out = self.pressure.clone();
+        let mut base = self.particles.len();
+        for g in &self.generate {
+            if let Generator::Ring {
+                segments, pressure, ..
+            } = *g
+                && pressure > 0.0
+            {
+                out.push(PressureDef {
+                    particles: (base..base + segments).collect(),
+                    nrt: pressure,
+                });
+            }
+            base += g.counts().0;
+        }
+        out
+    }
+
+    /// Whether some spring has a material beyond the Hooke spring (a dashpot of its own, a
+    /// muscle, plasticity), without expanding the generators.
+    pub fn has_spring_materials(&self) -> bool {
+        self.springs.iter().any(SpringDef::has_material)
+            || self.generate.iter().any(|g| match *g {
+                Generator::Grid {
+                    damping, plastic, ..
+                } => damping.is_some() || plastic.is_some(),
+                Generator::Ring { damping, .. } => damping.is_some(),
+                Generator::Chain { .. } => false,
+            })
     }
 
     /// How many particles and springs the scene has, generators included (saturating).
@@ -77,6 +113,7 @@ impl Generator {
                 (cols * rows, structural + if shear { 2 * c * r } else { 0 })
             }
             Generator::Chain { segments, .. } => (segments + 1, segments),
+            Generator::Ring { segments, .. } => (segments, segments),
         }
     }
 
@@ -96,6 +133,7 @@ impl Generator {
                     Pin::None => false,
                     Pin::First => r == 0,
                     Pin::Ends => r == 0 && (c == 0 || c == cols - 1),
+                    Pin::Left => c == 0,
                 };
                 ParticleDef {
                     pos: self.position(i),
@@ -115,9 +153,15 @@ impl Generator {
                 mass,
                 pinned: match pin {
                     Pin::None => false,
-                    Pin::First => i == 0,
+                    Pin::First | Pin::Left => i == 0,
                     Pin::Ends => i == 0 || i == segments,
                 },
+            },
+            Generator::Ring { mass, .. } => ParticleDef {
+                pos: self.position(i),
+                vel: (0.0, 0.0),
+                mass,
+                pinned: false,
             },
         })
     }
@@ -145,23 +189,40 @@ impl Generator {
                 let p = a + (b - a) * (i as f64 / segments as f64);
                 (p.x, p.y)
             }
+            Generator::Ring {
+                center,
+                radius,
+                segments,
+                ..
+            } => {
+                let t = std::f64::consts::TAU * i as f64 / segments as f64;
+                (center.0 + radius * t.cos(), center.1 + radius * t.sin())
+            }
         }
     }
 
     /// The generator's springs between its particles `base + i`, rest at the initial distance.
     fn spring_defs(&self, base: usize) -> impl Iterator<Item = SpringDef> + '_ {
+        let (damping, plastic) = match *self {
+            Generator::Grid {
+                damping, plastic, ..
+            } => (damping, plastic),
+            Generator::Ring { damping, .. } => (damping, None),
+            Generator::Chain { .. } => (None, None),
+        };
         let spring = move |a: usize, b: usize, stiffness: f64| {
             let (pa, pb) = (self.position(a), self.position(b));
+            let rest = (DVec2::from(pa) - DVec2::from(pb)).length();
             SpringDef {
-                a: base + a,
-                b: base + b,
-                stiffness,
-                rest: (DVec2::from(pa) - DVec2::from(pb)).length(),
+                damping,
+                plastic,
+                ..SpringDef::new(base + a, base + b, rest, stiffness)
             }
         };
         let (cells, per_cell) = match *self {
             Generator::Grid { cols, rows, .. } => (cols * rows, 4),
             Generator::Chain { segments, .. } => (segments, 1),
+            Generator::Ring { segments, .. } => (segments, 1),
         };
         (0..cells).flat_map(move |i| {
             let mut out = [None; 4];
@@ -187,6 +248,11 @@ impl Generator {
                     }
                 }
                 Generator::Chain { stiffness, .. } => out[0] = Some(spring(i, i + 1, stiffness)),
+                Generator::Ring {
+                    stiffness,
+                    segments,
+                    ..
+                } => out[0] = Some(spring(i, (i + 1) % segments, stiffness)),
             }
             out.into_iter().take(per_cell).flatten()
         })
@@ -258,6 +324,8 @@ mod tests {
                     shear: true,
                     pin: Pin::First,
                     vel: (0.1, 0.0),
+                    damping: None,
+                    plastic: None,
                 },
             ],
             ..Scene::default()

@@ -1,6 +1,6 @@
 //! Reading scene files and putting scenes into a Bevy world.
 
-use super::format::{ParticleDef, Scene, SpringDef};
+use super::format::{Actuation, ParticleDef, Plasticity, PressureDef, Scene, SpringDef};
 use super::generate::Expanded;
 use super::reserve::Reserved;
 use super::validate::validate;
@@ -133,6 +133,7 @@ pub fn load_into_world(world: &mut World, loaded: &LoadedScene) {
     let params = SimParams {
         gravity: DVec2::from(s.gravity),
         damping: s.damping,
+        spring_damping: s.spring_damping,
         ground: s.ground,
         integrator: s.integrator,
         dt: s.dt,
@@ -144,11 +145,13 @@ pub fn load_into_world(world: &mut World, loaded: &LoadedScene) {
     };
     despawn_contents(world, params);
     replace_obstacles(world, &s.obstacles);
-    spawn_streamed(
+    let particles = spawn_streamed(
         world,
         loaded.scene.particle_defs(),
         loaded.scene.spring_defs(),
+        loaded.scene.has_spring_materials(),
     );
+    spawn_pressure(world, &particles, &loaded.scene.pressure_defs());
     world.insert_resource(SimClock::default());
     world.insert_resource(SimStatus::default());
     world.insert_resource(PassCounts::default());
@@ -167,7 +170,7 @@ pub fn replace_contents(world: &mut World, params: SimParams, expanded: &Expande
 /// Despawns every particle and spring and sets the parameters; a new, empty solver.
 fn despawn_contents(world: &mut World, params: SimParams) {
     let old: Vec<Entity> = world
-        .query_filtered::<Entity, Or<(With<Particle>, With<Spring>)>>()
+        .query_filtered::<Entity, Or<(With<Particle>, With<Spring>, With<PressureBody>)>>()
         .iter(world)
         .collect();
     for e in old {
@@ -218,11 +221,45 @@ pub fn obstacle_defs(world: &mut World) -> Vec<super::format::ObstacleDef> {
 /// Spawns particles and springs (in that order, so their creation order is the list's);
 /// springs index into the particles given here. Returns the particles.
 pub fn spawn_expanded(world: &mut World, expanded: &Expanded) -> Vec<Entity> {
-    spawn_streamed(
+    let particles = spawn_streamed(
         world,
         expanded.particles.iter().copied(),
         expanded.springs.iter().copied(),
-    )
+        expanded.springs.iter().any(SpringDef::has_material),
+    );
+    spawn_pressure(world, &particles, &expanded.pressure);
+    particles
+}
+
+/// Spawns a [`PressureBody`] for each loop, over the particles just spawned.
+fn spawn_pressure(world: &mut World, particles: &[Entity], loops: &[PressureDef]) {
+    for def in loops {
+        world.spawn(PressureBody {
+            particles: def.particles.iter().map(|&i| particles[i]).collect(),
+            nrt: def.nrt,
+        });
+    }
+}
+
+/// A spring's material components, inserted beside its [`Spring`].
+fn insert_materials(world: &mut World, e: Entity, def: &SpringDef) {
+    let mut spring = world.entity_mut(e);
+    if let Some(c) = def.damping {
+        spring.insert(Dashpot(c));
+    }
+    if let Some(a) = def.actuation {
+        spring.insert(Muscle {
+            amplitude: a.amplitude,
+            frequency: a.frequency,
+            phase: a.phase,
+        });
+    }
+    if let Some(p) = def.plastic {
+        spring.insert(Plastic {
+            yield_strain: p.yield_strain,
+            rate: p.rate,
+        });
+    }
 }
 
 /// [`spawn_expanded`] from streams, in batches that the ECS sizes from the streams' lengths,
@@ -235,6 +272,7 @@ fn spawn_streamed(
     world: &mut World,
     particles: impl Iterator<Item = ParticleDef>,
     springs: impl Iterator<Item = SpringDef>,
+    materials: bool,
 ) -> Vec<Entity> {
     let exact = |(lower, upper): (usize, Option<usize>)| (upper == Some(lower)).then_some(lower);
     let counts = exact(particles.size_hint()).zip(exact(springs.size_hint()));
@@ -266,6 +304,25 @@ fn spawn_streamed(
     for &i in &pinned {
         world.entity_mut(entities[i]).insert(Pinned);
     }
+    if materials {
+        // Springs with materials of their own: one by one, each with its components (such
+        // scenes are small).
+        if let Some(r) = reserved {
+            r.finish(world);
+        }
+        for s in springs {
+            let e = world
+                .spawn(Spring::new(
+                    entities[s.a],
+                    entities[s.b],
+                    s.rest,
+                    s.stiffness,
+                ))
+                .id();
+            insert_materials(world, e, &s);
+        }
+        return entities;
+    }
     let mut springs =
         springs.map(|s| Spring::new(entities[s.a], entities[s.b], s.rest, s.stiffness));
     let half = counts.map_or(0, |c| c.1 / 2);
@@ -291,6 +348,7 @@ pub fn snapshot(world: &mut World) -> Scene {
     Scene {
         gravity: (params.gravity.x, params.gravity.y),
         damping: params.damping,
+        spring_damping: params.spring_damping,
         ground: params.ground,
         integrator: params.integrator,
         dt: params.dt,
@@ -303,6 +361,7 @@ pub fn snapshot(world: &mut World) -> Scene {
         iterations: params.iterations,
         obstacles,
         contact: params.contact,
+        pressure: state.pressure,
     }
 }
 
@@ -338,23 +397,57 @@ pub fn explicit_state(world: &mut World, stiffness: Option<f64>) -> Expanded {
         .map(|(i, p)| (p.1, i))
         .collect();
     let mut springs: Vec<(Entity, SpringDef)> = world
-        .query::<(Entity, &Spring)>()
+        .query::<(
+            Entity,
+            &Spring,
+            Option<&Dashpot>,
+            Option<&Muscle>,
+            Option<&Plastic>,
+        )>()
         .iter(world)
-        .filter_map(|(e, s)| {
+        .filter_map(|(e, s, dashpot, muscle, plastic)| {
             let def = SpringDef {
-                a: *index.get(&s.a)?,
-                b: *index.get(&s.b)?,
-                stiffness: stiffness.unwrap_or(s.stiffness),
-                rest: s.rest,
+                damping: dashpot.map(|d| d.0),
+                actuation: muscle.map(|m| Actuation {
+                    amplitude: m.amplitude,
+                    frequency: m.frequency,
+                    phase: m.phase,
+                }),
+                plastic: plastic.map(|p| Plasticity {
+                    yield_strain: p.yield_strain,
+                    rate: p.rate,
+                }),
+                ..SpringDef::new(
+                    *index.get(&s.a)?,
+                    *index.get(&s.b)?,
+                    s.rest,
+                    stiffness.unwrap_or(s.stiffness),
+                )
             };
             Some((e, def))
         })
         .collect();
+    // Loops by their particles' indices; a despawned particle leaves its loop.
+    let mut pressure: Vec<(Entity, PressureDef)> = world
+        .query::<(Entity, &PressureBody)>()
+        .iter(world)
+        .map(|(e, body)| {
+            let particles = body.particles.iter().filter_map(|p| index.get(p).copied());
+            let def = PressureDef {
+                particles: particles.collect(),
+                nrt: body.nrt,
+            };
+            (e, def)
+        })
+        .filter(|(_, def)| def.particles.len() >= 3)
+        .collect();
+    pressure.sort_by_key(|(e, _)| *e);
     // In the solver's order: by ends, ties by entity.
     springs.sort_by_key(|(e, s)| (s.a, s.b, *e));
     Expanded {
         particles: particles.into_iter().map(|p| p.2).collect(),
         springs: springs.into_iter().map(|s| s.1).collect(),
+        pressure: pressure.into_iter().map(|p| p.1).collect(),
     }
 }
 

@@ -21,6 +21,9 @@ pub const BUILTIN: &[(&str, &str)] = &[
         "folding_cloth",
         include_str!("../../assets/scenes/folding_cloth.ron"),
     ),
+    ("balloon", include_str!("../../assets/scenes/balloon.ron")),
+    ("walker", include_str!("../../assets/scenes/walker.ron")),
+    ("wire", include_str!("../../assets/scenes/wire.ron")),
 ];
 
 /// The scene the app opens with: the assignment's empty canvas.

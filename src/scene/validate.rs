@@ -27,6 +27,12 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
     if let Some(g) = scene.ground.filter(|g| !g.is_finite()) {
         p.push(format!("ground: must be finite, got {g}"));
     }
+    if !(scene.spring_damping.is_finite() && scene.spring_damping >= 0.0) {
+        p.push(format!(
+            "spring_damping: must be finite and >= 0, got {}",
+            scene.spring_damping
+        ));
+    }
     if !(scene.dt.is_finite() && scene.dt > 0.0) {
         p.push(format!("dt: must be finite and > 0, got {}", scene.dt));
     }
@@ -76,8 +82,14 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
                 mass,
                 stiffness,
                 vel,
+                damping,
+                plastic,
                 ..
             } => {
+                check_damping(&mut p, &at, damping);
+                if let Some(plastic) = plastic {
+                    check_plastic(&mut p, &at, &plastic);
+                }
                 if cols < 2 || rows < 2 {
                     p.push(format!(
                         "{at}: a grid needs cols >= 2 and rows >= 2, got {cols} x {rows}"
@@ -105,6 +117,33 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
                 }
                 check_mass(&mut p, &at, mass);
                 check_stiffness(&mut p, &at, stiffness);
+            }
+            Generator::Ring {
+                center,
+                radius,
+                segments,
+                mass,
+                stiffness,
+                pressure,
+                damping,
+            } => {
+                if segments < 3 {
+                    p.push(format!("{at}: a ring needs segments >= 3, got {segments}"));
+                }
+                if !finite2(center) {
+                    p.push(format!("{at}: center must be finite"));
+                }
+                if !(radius.is_finite() && radius > 0.0) {
+                    p.push(format!("{at}: radius must be finite and > 0, got {radius}"));
+                }
+                if !(pressure.is_finite() && pressure >= 0.0) {
+                    p.push(format!(
+                        "{at}: pressure (nRT) must be finite and >= 0, got {pressure}"
+                    ));
+                }
+                check_mass(&mut p, &at, mass);
+                check_stiffness(&mut p, &at, stiffness);
+                check_damping(&mut p, &at, damping);
             }
         }
     }
@@ -151,6 +190,65 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
             p.push(format!(
                 "{at}: rest must be finite and >= 0, got {}",
                 s.rest
+            ));
+        }
+        check_damping(&mut p, &at, s.damping);
+        if let Some(a) = s.actuation {
+            if !(a.amplitude.is_finite() && a.amplitude.abs() < 1.0) {
+                p.push(format!(
+                    "{at}: actuation.amplitude must be finite and between -1 and 1 (the rest \
+                     length L0 (1 + A sin) must stay positive), got {}",
+                    a.amplitude
+                ));
+            }
+            if !(a.frequency.is_finite() && a.frequency >= 0.0) {
+                p.push(format!(
+                    "{at}: actuation.frequency must be finite and >= 0, got {}",
+                    a.frequency
+                ));
+            }
+            if !a.phase.is_finite() {
+                p.push(format!(
+                    "{at}: actuation.phase must be finite, got {}",
+                    a.phase
+                ));
+            }
+        }
+        if let Some(plastic) = s.plastic {
+            check_plastic(&mut p, &at, &plastic);
+            if s.actuation.is_some() {
+                p.push(format!(
+                    "{at}: a spring is a muscle or plastic, not both (a muscle's rest length \
+                     follows its actuation, so it cannot yield)"
+                ));
+            }
+        }
+    }
+    for (i, body) in scene.pressure.iter().enumerate() {
+        let at = format!("pressure[{i}]");
+        if body.particles.len() < 3 {
+            p.push(format!(
+                "{at}: a loop needs at least 3 particles, got {}",
+                body.particles.len()
+            ));
+        }
+        if let Some(&bad) = body.particles.iter().find(|&&j| j >= n_particles) {
+            p.push(format!(
+                "{at}: particle {bad} is out of range (the scene has {n_particles} particles)"
+            ));
+        }
+        let mut seen = body.particles.clone();
+        seen.sort_unstable();
+        if let Some(w) = seen.windows(2).find(|w| w[0] == w[1]) {
+            p.push(format!(
+                "{at}: particle {} appears twice: a loop visits each particle once",
+                w[0]
+            ));
+        }
+        if !(body.nrt.is_finite() && body.nrt >= 0.0) {
+            p.push(format!(
+                "{at}: nrt must be finite and >= 0, got {}",
+                body.nrt
             ));
         }
     }
@@ -209,6 +307,27 @@ fn pairs_start_apart(scene: &Scene, radius: f64) -> Option<String> {
          such pair: at most {:.4} here",
         0.5 * d
     ))
+}
+
+fn check_damping(p: &mut Problems, at: &str, c: Option<f64>) {
+    if let Some(c) = c.filter(|c| !(c.is_finite() && *c >= 0.0)) {
+        p.push(format!("{at}: damping must be finite and >= 0, got {c}"));
+    }
+}
+
+fn check_plastic(p: &mut Problems, at: &str, plastic: &Plasticity) {
+    if !(plastic.yield_strain.is_finite() && plastic.yield_strain >= 0.0) {
+        p.push(format!(
+            "{at}: plastic.yield must be finite and >= 0, got {}",
+            plastic.yield_strain
+        ));
+    }
+    if !(plastic.rate.is_finite() && plastic.rate >= 0.0) {
+        p.push(format!(
+            "{at}: plastic.rate must be finite and >= 0, got {}",
+            plastic.rate
+        ));
+    }
 }
 
 fn check_mass(p: &mut Problems, at: &str, mass: f64) {

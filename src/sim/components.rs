@@ -135,6 +135,51 @@ impl Spring {
     }
 }
 
+/// A dashpot along a spring: `f_a = −c ((v_a − v_b)·n) n`, and `f_b = −f_a`, with n the unit
+/// vector from b to a and `c` in N·s/m. It damps the spring's own vibration and leaves the
+/// motion of the whole alone (a falling body falls as fast with it). Put it on a spring's
+/// entity beside its [`Spring`]; springs without one take [`crate::sim::SimParams::spring_damping`].
+#[derive(Component, Debug, Clone, Copy, PartialEq)]
+pub struct Dashpot(pub f64);
+
+/// A muscle: the spring's rest length oscillates as L(t) = L₀ (1 + A sin(2π f t + φ)), with L₀
+/// its [`Spring::rest`] and t the simulated time ([`crate::sim::SimClock::time`]). The rest
+/// length is set at the start of each step.
+#[derive(Component, Debug, Clone, Copy, PartialEq)]
+pub struct Muscle {
+    /// A, a fraction of the rest length.
+    pub amplitude: f64,
+    /// f, Hz.
+    pub frequency: f64,
+    /// φ, rad.
+    pub phase: f64,
+}
+
+/// A plastic spring: strained past `yield_strain` (|l − L|/L), its rest length creeps toward
+/// its length at `rate` (1/s), so that a bent thing stays bent. The solver writes the new rest
+/// length back to the [`Spring`].
+#[derive(Component, Debug, Clone, Copy, PartialEq)]
+pub struct Plastic {
+    /// ε_y, the strain past which the spring yields.
+    pub yield_strain: f64,
+    /// r, 1/s.
+    pub rate: f64,
+}
+
+/// A closed loop of particles filled with an ideal gas: the pressure at area A is `nrt / A`,
+/// and it pushes each edge of the loop outward with the pressure times the edge's length
+/// (Matyka and Ollila 2004). `particles` go around the loop in order, either way round; `nrt`
+/// is nRT in N·m (2D). Spawn it as an entity of its own:
+/// `commands.spawn(PressureBody { particles, nrt: 20.0 })`. A despawned particle leaves the
+/// loop, which closes over the rest.
+#[derive(Component, Debug, Clone, PartialEq)]
+pub struct PressureBody {
+    /// The loop's particles, in order.
+    pub particles: Vec<Entity>,
+    /// nRT, N·m.
+    pub nrt: f64,
+}
+
 /// A command that joins `particle` to every other particle within `radius` of it, each by a
 /// spring at rest at their current distance (the app's click rule):
 /// `commands.queue(JoinWithin { particle, radius: 0.15, stiffness: 1e4 })`.
@@ -201,3 +246,11 @@ impl Serials {
         self.next
     }
 }
+
+/// The query filter for entities whose materials were added or changed.
+pub(crate) type MaterialChanged = bevy::ecs::query::Or<(
+    bevy::ecs::query::Changed<Dashpot>,
+    bevy::ecs::query::Changed<Muscle>,
+    bevy::ecs::query::Changed<Plastic>,
+    bevy::ecs::query::Changed<PressureBody>,
+)>;

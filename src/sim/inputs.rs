@@ -1,12 +1,12 @@
 //! Checks, at the start of every fixed tick, what users can write: the [`SimParams`],
 //! [`TickPlan`] and [`CgSettings`] resources and the particles' [`Mass`] and springs'
-//! [`Spring`] components (those added or changed
+//! [`Spring`] components and their materials (those added or changed
 //! since the last tick). A bad value pauses the simulation with
 //! [`SimStatus::InvalidInput`], which names the field and the value; until it is mended the
 //! solver is neither fed nor stepped nor written back, so the last good state stays and no NaN
 //! is drawn. Mended, the status goes back to running (still paused).
 
-use super::components::{Mass, Particle, Spring};
+use super::components::{Dashpot, Mass, Muscle, Particle, Plastic, PressureBody, Spring};
 use super::obstacles::{Obstacle, ObstaclePose, ObstacleVelocity};
 pub use super::params::InputProblem;
 use super::params::{CgSettings, Iterations, SimParams, SimStatus, TickPlan};
@@ -49,6 +49,13 @@ pub fn check_params(p: &SimParams) -> Option<InputProblem> {
     }
     if bad_non_negative(p.damping) {
         return Some(problem("SimParams.damping", p.damping, NON_NEGATIVE));
+    }
+    if bad_non_negative(p.spring_damping) {
+        return Some(problem(
+            "SimParams.spring_damping",
+            p.spring_damping,
+            NON_NEGATIVE,
+        ));
     }
     if let Some(g) = p.ground.filter(|g| !g.is_finite()) {
         return Some(problem("SimParams.ground", g, FINITE));
@@ -163,12 +170,72 @@ fn check_spring(
     None
 }
 
-/// The masses and springs added or changed since the last check (a filtered scan: it reads
-/// change ticks, not components, for the rest).
+/// An entity's materials, as the input check reads them.
+type MaterialsOf = (
+    Entity,
+    Option<&'static Dashpot>,
+    Option<&'static Muscle>,
+    Option<&'static Plastic>,
+    Option<&'static PressureBody>,
+);
+
+/// The first problem with an entity's materials: a dashpot, a muscle, plasticity, a gas.
+fn check_materials(
+    (e, dashpot, muscle, plastic, body): (
+        Entity,
+        Option<&Dashpot>,
+        Option<&Muscle>,
+        Option<&Plastic>,
+        Option<&PressureBody>,
+    ),
+) -> Option<InputProblem> {
+    const NON_NEGATIVE: &str = "must be finite and >= 0";
+    let bad = |v: f64| !(v.is_finite() && v >= 0.0);
+    let found = if let Some(d) = dashpot.filter(|d| bad(d.0)) {
+        Some(problem("Dashpot", d.0, NON_NEGATIVE))
+    } else if let Some(m) = muscle.filter(|m| !(m.amplitude.is_finite() && m.amplitude.abs() < 1.0))
+    {
+        Some(problem(
+            "Muscle.amplitude",
+            m.amplitude,
+            "must be finite and between -1 and 1",
+        ))
+    } else if let Some(m) = muscle.filter(|m| bad(m.frequency)) {
+        Some(problem("Muscle.frequency", m.frequency, NON_NEGATIVE))
+    } else if let Some(m) = muscle.filter(|m| !m.phase.is_finite()) {
+        Some(problem("Muscle.phase", m.phase, "must be finite"))
+    } else if let Some(p) = plastic.filter(|p| bad(p.yield_strain)) {
+        Some(problem(
+            "Plastic.yield_strain",
+            p.yield_strain,
+            NON_NEGATIVE,
+        ))
+    } else if let Some(p) = plastic.filter(|p| bad(p.rate)) {
+        Some(problem("Plastic.rate", p.rate, NON_NEGATIVE))
+    } else if muscle.is_some() && plastic.is_some() {
+        Some(bad_end(
+            "Plastic",
+            "cannot go with a Muscle on one spring: a muscle's rest length follows its actuation",
+        ))
+    } else {
+        body.filter(|b| bad(b.nrt))
+            .map(|b| problem("PressureBody.nrt", b.nrt, NON_NEGATIVE))
+    };
+    found.map(|p| InputProblem {
+        entity: Some(e),
+        ..p
+    })
+}
+
+/// The masses, springs and materials added or changed since the last check (a filtered scan:
+/// it reads change ticks, not components, for the rest).
 #[derive(bevy::ecs::system::SystemParam)]
 pub struct ChangedInputs<'w, 's> {
     masses: Query<'w, 's, (Entity, &'static Mass), Changed<Mass>>,
     springs: Query<'w, 's, (Entity, &'static Spring), Changed<Spring>>,
+    materials: Query<'w, 's, MaterialsOf, crate::sim::components::MaterialChanged>,
+    /// Any entity's materials (the standing problem's, checked again).
+    all_materials: Query<'w, 's, MaterialsOf>,
 }
 
 /// Run condition: the inputs passed the last check.
@@ -204,7 +271,8 @@ pub fn check_inputs(
             let (e, s) = springs.get(e).ok()?;
             check_spring(e, s, is_particle)
         };
-        mass.or_else(spring)
+        let materials = || check_materials(changed.all_materials.get(e).ok()?);
+        mass.or_else(spring).or_else(materials)
     });
     let found = still
         .or_else(|| check_params(&params))
@@ -221,7 +289,8 @@ pub fn check_inputs(
                 .springs
                 .iter()
                 .find_map(|(e, s)| check_spring(e, s, is_particle))
-        });
+        })
+        .or_else(|| changed.materials.iter().find_map(check_materials));
     match found {
         Some(p) => {
             if *status != SimStatus::InvalidInput(p) {

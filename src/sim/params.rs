@@ -72,7 +72,12 @@ pub struct SimParams {
     /// Gravitational acceleration, m/s².
     pub gravity: DVec2,
     /// Velocity damping rate μ, 1/s: each step multiplies velocities by exp(-μ dt). 0 = off.
+    /// It slows every motion alike, falling included (air drag); [`Self::spring_damping`]
+    /// damps only the springs' vibration.
     pub damping: f64,
+    /// The dashpot c (N·s/m) of every spring without a [`crate::sim::Dashpot`] of its own
+    /// (the panel's slider and `--spring-damping`). 0 = off, and no dashpot pass runs.
+    pub spring_damping: f64,
     /// Height of the ground; `None` = no ground.
     pub ground: Option<f64>,
     /// The time integrator.
@@ -100,6 +105,7 @@ impl Default for SimParams {
         SimParams {
             gravity: DVec2::new(0.0, -9.8),
             damping: 10.0,
+            spring_damping: 0.0,
             ground: Some(0.0),
             integrator: Integrator::SymplecticEuler,
             dt: 1e-4,
@@ -203,6 +209,12 @@ pub struct PassCounts {
     pub tear: u64,
     /// Contact passes (only while the scene has obstacles, or contact with a ground).
     pub contact: u64,
+    /// Steps that evaluated dashpot or gas forces (only while the scene has them).
+    pub materials: u64,
+    /// Muscle passes, which set the muscles' rest lengths (only while the scene has muscles).
+    pub actuate: u64,
+    /// Plasticity passes (only while the scene has plastic springs).
+    pub yield_springs: u64,
 }
 
 /// Springs broken by tearing since the scene was loaded, and those found this tick (despawned

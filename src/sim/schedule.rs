@@ -68,6 +68,9 @@ pub struct PhysicsStep;
 /// ```
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum StepSystems {
+    /// 0. Only with muscles: each muscle's rest length for the step's start time. Runs first,
+    ///    before the forces.
+    Actuate,
     /// 1. f = m g + f_ext + Σ spring forces at the start-of-step positions.
     Forces,
     /// 2. The integrator's velocity update (and what it needs for the position update).
@@ -85,6 +88,9 @@ pub enum StepSystems {
     ///    is set ([`crate::solver::contact`]); then the obstacles move by their velocities.
     ///    Runs only when the scene has obstacles, contact with a ground, or particle pairs.
     Collide,
+    /// 7. Only with plastic springs: each strained past its yield moves its rest length toward
+    ///    its length ([`crate::sim::Plastic`]).
+    Yield,
 }
 
 /// The old name of [`StepSystems`].
@@ -258,6 +264,10 @@ impl Plugin for SimPlugin {
                     .in_set(PhysicsSystems::Writeback)
                     .run_if(inputs::inputs_valid)
                     .run_if(resource_changed::<Solver>),
+                super::sync::write_back_rest_lengths
+                    .in_set(PhysicsSystems::Writeback)
+                    .run_if(inputs::inputs_valid)
+                    .run_if(scene_has_plastic_springs),
                 super::obstacles::write_back_obstacles
                     .in_set(PhysicsSystems::Writeback)
                     .run_if(inputs::inputs_valid)
@@ -290,12 +300,14 @@ impl Plugin for SimPlugin {
                 })
                 .configure_sets(
                     (
+                        StepSystems::Actuate,
                         StepSystems::Forces,
                         StepSystems::Integrate,
                         StepSystems::Damping,
                         StepSystems::Ground,
                         StepSystems::Advance,
                         StepSystems::Collide,
+                        StepSystems::Yield,
                     )
                         .chain(),
                 )
@@ -329,6 +341,12 @@ impl Plugin for SimPlugin {
                         .chain()
                         .in_set(StepSystems::Advance),
                     collide.run_if(contact_enabled).in_set(StepSystems::Collide),
+                    actuate
+                        .run_if(scene_has_muscles)
+                        .in_set(StepSystems::Actuate),
+                    yield_springs
+                        .run_if(scene_has_plastic_springs)
+                        .in_set(StepSystems::Yield),
                 ));
         });
     }
@@ -341,9 +359,19 @@ pub fn simulation_running(params: Res<SimParams>, status: Res<SimStatus>) -> boo
     !params.paused && *status == SimStatus::Running
 }
 
-/// Run condition: the scene has springs.
+/// Run condition: the scene has springs (or gas bodies, whose forces the force pass adds).
 pub fn scene_has_springs(solver: Res<Solver>) -> bool {
-    !solver.springs.is_empty()
+    !solver.springs.is_empty() || !solver.materials().gas().is_empty()
+}
+
+/// Run condition: some spring is a muscle.
+pub fn scene_has_muscles(solver: Res<Solver>) -> bool {
+    !solver.materials().muscles().is_empty()
+}
+
+/// Run condition: some spring is plastic.
+pub fn scene_has_plastic_springs(solver: Res<Solver>) -> bool {
+    !solver.materials().plastic().is_empty()
 }
 
 /// Run condition: the integrator reads the spring forces at the start of the step (projective
@@ -430,6 +458,19 @@ fn forces(
     step::forces(&mut s.state, &mut s.work, params.gravity, &threads);
     n.gravity += 1;
     n.springs += 1;
+    n.materials += s.state.materials().exerts_forces() as u64;
+}
+
+/// The muscles' rest lengths for the step about to start.
+fn actuate(mut solver: ResMut<Solver>, clock: Res<SimClock>, mut n: ResMut<PassCounts>) {
+    step::actuate(&mut solver.state, clock.time);
+    n.actuate += 1;
+}
+
+/// Plastic springs yield.
+fn yield_springs(mut solver: ResMut<Solver>, params: Res<SimParams>, mut n: ResMut<PassCounts>) {
+    step::yield_springs(&mut solver.state, params.dt);
+    n.yield_springs += 1;
 }
 
 /// The integrator's update, for whichever integrator the run condition selected.
@@ -453,6 +494,10 @@ fn integrate(
             .map(|c| c.radius),
     };
     let s = &mut *solver;
+    if !method.integrator.reads_spring_forces() {
+        // Projective dynamics and XPBD take the materials' forces inside their solves.
+        n.materials += s.state.materials().exerts_forces() as u64;
+    }
     if let Err(e) = step::integrate(&mut s.state, &mut s.work, &method, &threads) {
         // Only when memory runs out: with m > 0 and k >= 0 (checked) projective dynamics'
         // M + h²L is positive definite. The step is refused like a blow-up, which pauses with

@@ -26,6 +26,28 @@ pub struct StructureChanges<'w, 's> {
     removed_particles: RemovedComponents<'w, 's, Particle>,
     removed_springs: RemovedComponents<'w, 's, Spring>,
     removed_pins: RemovedComponents<'w, 's, Pinned>,
+    materials: MaterialChanges<'w, 's>,
+}
+
+/// Materials added, changed or removed: they repack (they are rare edits, and their packed
+/// lists follow the springs' order).
+#[derive(SystemParam)]
+pub struct MaterialChanges<'w, 's> {
+    changed: Query<'w, 's, (), crate::sim::components::MaterialChanged>,
+    removed_dashpots: RemovedComponents<'w, 's, Dashpot>,
+    removed_muscles: RemovedComponents<'w, 's, Muscle>,
+    removed_plastic: RemovedComponents<'w, 's, Plastic>,
+    removed_bodies: RemovedComponents<'w, 's, PressureBody>,
+}
+
+impl MaterialChanges<'_, '_> {
+    fn any(&mut self) -> bool {
+        let removed = self.removed_dashpots.read().count()
+            + self.removed_muscles.read().count()
+            + self.removed_plastic.read().count()
+            + self.removed_bodies.read().count();
+        removed > 0 || !self.changed.is_empty()
+    }
 }
 
 impl StructureChanges<'_, '_> {
@@ -34,8 +56,18 @@ impl StructureChanges<'_, '_> {
         let removed = self.removed_particles.read().count()
             + self.removed_springs.read().count()
             + self.removed_pins.read().count();
-        removed > 0 || !self.added_particles.is_empty() || !self.added_pins.is_empty()
+        let materials = self.materials.any();
+        removed > 0 || materials || !self.added_particles.is_empty() || !self.added_pins.is_empty()
     }
+}
+
+/// The materials' components, read when the solver repacks.
+#[derive(SystemParam)]
+pub struct MaterialData<'w, 's> {
+    dashpots: Query<'w, 's, (Entity, &'static Dashpot), With<Spring>>,
+    muscles: Query<'w, 's, (Entity, &'static Muscle), With<Spring>>,
+    plastic: Query<'w, 's, (Entity, &'static Plastic), With<Spring>>,
+    bodies: Query<'w, 's, &'static PressureBody>,
 }
 
 type ParticleData<'a> = (
@@ -84,11 +116,17 @@ pub fn sync_into_solver(
     mut particles: Particles,
     springs: Springs,
     mut edits: Edits,
+    materials: MaterialData,
 ) {
     let repack = |solver: &mut Solver, particles: &mut Particles, edits: &mut Edits| {
         edits.released.clear();
         rebuild(solver, particles, &springs);
+        pack_materials(solver, particles, &materials);
         solver.apply_stiffness_override(params.stiffness_override);
+        let n = solver.springs.len();
+        solver
+            .materials
+            .apply_default_dashpot(params.spring_damping, n);
     };
     if structure.any() {
         repack(&mut solver, &mut particles, &mut edits);
@@ -110,6 +148,9 @@ pub fn sync_into_solver(
             return;
         };
         solver.springs[si].rest = spring.rest;
+        if let Some(m) = solver.materials.muscle_mut(si) {
+            m.rest = spring.rest;
+        }
         solver.set_own_stiffness(si, spring.stiffness);
     }
     let mut external_changed = false;
@@ -152,6 +193,83 @@ pub fn sync_into_solver(
     if springs_changed || solver.applied_override != params.stiffness_override {
         solver.apply_stiffness_override(params.stiffness_override);
     }
+    if solver.materials.default_dashpot.to_bits() != params.spring_damping.to_bits() {
+        let n = solver.springs.len();
+        if solver
+            .materials
+            .apply_default_dashpot(params.spring_damping, n)
+        {
+            solver.touch();
+        }
+    }
+}
+
+/// Packs the materials of the springs and loops just packed: each spring's by its entity
+/// index (sorted lists, searched: no map of every spring), the pressure bodies' loops by their
+/// particles' dense indices.
+fn pack_materials(solver: &mut Solver, particles: &Particles, data: &MaterialData) {
+    use crate::solver::{GasBody, Materials, PackedMuscle, PackedPlastic};
+    let mut m = Materials::default();
+    let spring_slots = |list: Vec<(u32, usize)>| -> Vec<(u32, usize)> {
+        let mut list = list;
+        list.sort_unstable();
+        let mut out = vec![];
+        for (i, e) in solver.spring_entity_indices.iter().enumerate() {
+            if let Ok(k) = list.binary_search_by_key(e, |(e, _)| *e) {
+                out.push((i as u32, list[k].1));
+            }
+        }
+        out
+    };
+    if !data.dashpots.is_empty() {
+        let own: Vec<Dashpot> = data.dashpots.iter().map(|(_, d)| *d).collect();
+        let list = (data.dashpots.iter().enumerate())
+            .map(|(k, (e, _))| (e.index_u32(), k))
+            .collect();
+        m.own_dashpot = vec![f64::NAN; solver.springs.len()];
+        for (i, k) in spring_slots(list) {
+            m.own_dashpot[i as usize] = own[k].0;
+        }
+    }
+    if !data.muscles.is_empty() {
+        let all: Vec<Muscle> = data.muscles.iter().map(|(_, d)| *d).collect();
+        let list = (data.muscles.iter().enumerate())
+            .map(|(k, (e, _))| (e.index_u32(), k))
+            .collect();
+        for (i, k) in spring_slots(list) {
+            let (muscle, rest) = (all[k], solver.springs[i as usize].rest);
+            m.muscles.push(PackedMuscle {
+                spring: i,
+                rest,
+                amplitude: muscle.amplitude,
+                frequency: muscle.frequency,
+                phase: muscle.phase,
+            });
+        }
+    }
+    if !data.plastic.is_empty() {
+        let all: Vec<Plastic> = data.plastic.iter().map(|(_, d)| *d).collect();
+        let list = (data.plastic.iter().enumerate())
+            .map(|(k, (e, _))| (e.index_u32(), k))
+            .collect();
+        for (i, k) in spring_slots(list) {
+            m.plastic.push(PackedPlastic {
+                spring: i,
+                yield_strain: all[k].yield_strain,
+                rate: all[k].rate,
+            });
+        }
+    }
+    for body in &data.bodies {
+        let loop_: Vec<u32> = (body.particles.iter())
+            .filter_map(|e| particles.get(*e).ok().map(|p| p.8.0))
+            .filter(|&i| (i as usize) < solver.x.len())
+            .collect();
+        if loop_.len() >= 3 {
+            m.gas.push(GasBody::new(loop_, body.nrt, &solver.x));
+        }
+    }
+    solver.state.materials = m;
 }
 
 /// Repacks every particle and spring. Springs whose endpoints are not both particles are left
@@ -251,6 +369,7 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &Springs) {
         springs: packed,
         applied_override: None,
         non_finite: false,
+        materials: Default::default(),
         // The new revision makes the large-step methods redo their precomputation.
         revision: solver.state.revision.wrapping_add(1),
     };
@@ -359,6 +478,29 @@ pub fn sync_from_solver(
             if let Some(force) = &mut force {
                 force.bypass_change_detection().0 = solver.f[i];
             }
+        }
+    }
+}
+
+/// Writes the plastic springs' rest lengths back to their [`Spring`]s, without flagging them
+/// as changed, so that a save, an undo or a repack keeps the bend.
+pub fn write_back_rest_lengths(
+    solver: Res<Solver>,
+    entities: &bevy::ecs::entity::Entities,
+    mut springs: Query<&mut Spring>,
+) {
+    let moved: Vec<(Entity, f64)> = (solver.materials().plastic().iter())
+        .filter_map(|p| {
+            let i = p.spring as usize;
+            let e = solver.spring_entity(i, entities, |e| springs.get(e).ok().copied())?;
+            Some((e, solver.springs[i].rest))
+        })
+        .collect();
+    for (e, rest) in moved {
+        if let Ok(mut spring) = springs.get_mut(e)
+            && spring.rest.to_bits() != rest.to_bits()
+        {
+            spring.bypass_change_detection().rest = rest;
         }
     }
 }

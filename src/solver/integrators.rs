@@ -8,6 +8,7 @@
 //! (its Jacobian has no external term: an external force is taken as independent of x).
 
 use super::kernels::{apply_gravity, apply_gravity_and_external};
+use super::material::GasJacobian;
 use super::parallel::{SpringBuffers, Threads};
 use super::state::State;
 use super::stiffness::{self, Block, Sym2};
@@ -24,6 +25,8 @@ pub struct Scratch {
     cg: Cg,
     /// The pair passes' thread split (the force pass's and every stage's).
     pub(crate) pairs: SpringBuffers,
+    /// Implicit Euler: the gas bodies' share of the Newton matrix (empty without them).
+    gas: GasJacobian,
     /// Implicit Euler's Newton steps so far, and its time steps.
     newton_steps: u64,
     newton_solves: u64,
@@ -90,12 +93,13 @@ pub fn body_forces(
 /// f = m g + f_ext + Σ spring forces at positions `x`, in one parallel region: each thread
 /// starts its own particles with their body forces, then adds its springs' (bit for bit
 /// [`body_forces`] then the spring pass). Every force evaluation with springs runs it: the
-/// step's force pass and every stage.
+/// step's force pass and every stage. The materials' forces (dashpots at velocities `v`, gas
+/// pressure) follow, when the scene has them.
 pub fn forces_at(
     s: &State,
     pairs: &mut SpringBuffers,
     f: &mut [DVec2],
-    x: &[DVec2],
+    (x, v): (&[DVec2], &[DVec2]),
     g: DVec2,
     threads: &Threads,
 ) {
@@ -107,15 +111,38 @@ pub fn forces_at(
             Some(e) => apply_gravity_and_external(f, m, &e[start..start + f.len()], g),
         }
     };
-    super::parallel::spring_forces_from(threads, pairs, f, x, &s.springs, &init);
+    if s.materials.has_dashpots() && s.materials.dashpot().len() == s.springs.len() {
+        let springs = (&s.springs[..], s.materials.dashpot());
+        super::parallel::damped_spring_forces_from(threads, pairs, f, (x, v), springs, &init);
+        s.materials.add_gas_forces(x, f);
+    } else {
+        super::parallel::spring_forces_from(threads, pairs, f, x, &s.springs, &init);
+        if s.materials.exerts_forces() {
+            s.materials.add_forces(&s.springs, x, v, f);
+        }
+    }
 }
 
-/// A stage's evaluation: f(x) at the positions in `scratch.x`, into `scratch.f`.
+/// A stage's evaluation: f(x, v) at the positions in `scratch.x` and the stage velocities in
+/// `scratch.stage_v`, into `scratch.f`.
 fn stage_forces(s: &State, sc: &mut Scratch, g: DVec2, threads: &Threads) {
-    forces_at(s, &mut sc.pairs, &mut sc.f, &sc.x, g, threads);
+    forces_at(
+        s,
+        &mut sc.pairs,
+        &mut sc.f,
+        (&sc.x, &sc.stage_v),
+        g,
+        threads,
+    );
 }
 
 /// Velocity Verlet, kick-drift-kick, with a second force evaluation at x0 + dt v½.
+///
+/// With dashpots the second half kick is implicit in the velocity, v1 = v½ + h/2 a(x1, v1):
+/// it is evaluated at v½, then corrected once at the predicted v1 (the dashpot force is
+/// linear in the velocity, so the correction is one dashpot pass over the difference). Each
+/// correction gains a power of h, so the method stays second order; evaluated at v½ alone
+/// it would be first order in the damping.
 pub fn velocity_verlet(
     s: &mut State,
     sc: &mut Scratch,
@@ -130,19 +157,29 @@ pub fn velocity_verlet(
     let data = (
         &mut s.drift[..],
         &mut sc.x[..],
+        &mut sc.stage_v[..],
         &s.x[..],
         &s.v[..],
         &s.f[..],
         &s.inv_mass[..],
     );
-    threads.each(springs, data, |(u, xs, x, v, f, w)| {
+    threads.each(springs, data, |(u, xs, vs, x, v, f, w)| {
         for i in 0..u.len() {
             let v_half = v[i] + f[i] * (half * w[i]);
             u[i] = v_half;
+            vs[i] = v_half;
             xs[i] = x[i] + v_half * dt;
         }
     });
     stage_forces(s, sc, gravity, threads);
+    if s.materials.has_dashpots() {
+        // The predicted v1 − v½ = h/2 a(x1, v½), and the dashpot force of that difference.
+        for ((dv, f), w) in sc.stage_v.iter_mut().zip(&sc.f).zip(&s.inv_mass) {
+            *dv = *f * (half * w);
+        }
+        s.materials
+            .add_dashpot_forces(&s.springs, &sc.x, &sc.stage_v, &mut sc.f);
+    }
     let sc = &mut *sc;
     let data = (&mut s.v[..], &s.drift[..], &sc.f[..], &s.inv_mass[..]);
     threads.each(springs, data, |(v, u, f, w)| {
@@ -281,7 +318,9 @@ impl Cg {
 /// solve by block-Jacobi-preconditioned conjugate gradients.
 ///
 /// The first step is the classic one (Baraff and Witkin), linearised at x0:
-/// (M − h² K0) Δv = h (f0 + h K0 v0), v1 = v0 + Δv, warm-started from the previous step's Δv.
+/// (M − h² K0 − h D0) Δv = h (f0 + h K0 v0), v1 = v0 + Δv, warm-started from the previous
+/// step's Δv, with D = ∂f/∂v the dashpots' damping matrix and K0 the springs' Jacobian plus
+/// the gas bodies' positive semi-definite part ([`GasJacobian`]).
 /// Each further step linearises at x_k = x0 + h v_k: (M − h² K_k) δ = M (v0 − v_k) + h f(x_k),
 /// v_{k+1} = v_k + δ, which converges to the exact backward Euler step. K is the spring Jacobian
 /// with the transverse term of compressed springs dropped (coefficient max(0, 1 − L/l)), which
@@ -311,6 +350,11 @@ pub fn implicit_euler(
     let cg = &mut sc.cg;
     stiffness::blocks_threaded(threads, &s.springs, &s.x, &mut cg.blocks);
     stiffness::apply_threaded(threads, &mut cg.buffers, &mut cg.ap, &s.v, &cg.blocks); // K v0
+    let gas = &mut sc.gas;
+    gas.at(&s.materials, &s.x);
+    gas.add_product(&s.v, &mut cg.ap);
+    // The dashpots' damping matrix joins K in the Newton matrix, not in K v0.
+    s.materials.add_dashpot_blocks(&mut cg.blocks, &s.x, dt);
     let data = (&mut cg.z[..], &s.f[..], &cg.ap[..], &s.inv_mass[..]);
     let b_norm2 = threads.chunked(
         springs,
@@ -349,10 +393,13 @@ pub fn implicit_euler(
                 }
             },
         );
-        stage_forces(s, sc, gravity, threads);
+        // f(x_k, v_k): the dashpots see the iterate's velocity.
+        forces_at(s, &mut sc.pairs, &mut sc.f, (&sc.x, &s.v), gravity, threads);
         let sc = &mut *sc;
         let cg = &mut sc.cg;
         stiffness::blocks_threaded(threads, &s.springs, &sc.x, &mut cg.blocks);
+        s.materials.add_dashpot_blocks(&mut cg.blocks, &sc.x, dt);
+        sc.gas.at(&s.materials, &sc.x);
         // b = M (v0 − v_k) + h f(x_k); δ starts from 0.
         let data = (
             &mut cg.z[..],
@@ -417,6 +464,7 @@ fn solve(
         cg.diag[block.a as usize].add_scaled(block.m, h2);
         cg.diag[block.b as usize].add_scaled(block.m, h2);
     }
+    sc.gas.add_diagonal(&mut cg.diag, h2);
     threads.each(springs, (&mut cg.diag[..], &s.inv_mass[..]), |(diag, w)| {
         for (d, &w) in diag.iter_mut().zip(w) {
             *d = if w != 0.0 {
@@ -435,8 +483,10 @@ fn solve(
         }
     });
     // out = A u; returns u · A u.
+    let gas = &sc.gas;
     let a_times = |out: &mut [DVec2], u: &[DVec2], buffers: &mut SpringBuffers, blocks| {
         stiffness::apply_threaded(threads, buffers, out, u, blocks);
+        gas.add_product(u, out);
         apply_a(threads, springs, out, u, &s.mass, &s.inv_mass, h2)
     };
     a_times(&mut cg.ap, &cg.dv, &mut cg.buffers, &cg.blocks);

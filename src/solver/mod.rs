@@ -8,6 +8,8 @@
 //! * [`state`]: the packed arrays ([`State`], [`PackedSpring`]) and what is read from them
 //!   (energy, finiteness).
 //! * [`method`]: the integrators and their iteration counts.
+//! * [`material`]: dashpots, gas bodies, muscles and plastic springs, and where each enters
+//!   the methods.
 //! * [`obstacle`]: the geometry of contact: obstacle shapes, their distance and a swept test
 //!   against tunnelling, and one particle's response (friction, restitution).
 //! * [`contact`]: the contact pass that the step runs after the position update.
@@ -24,6 +26,7 @@ pub(crate) mod crew;
 pub(crate) mod etree;
 pub(crate) mod integrators;
 pub(crate) mod kernels;
+pub mod material;
 pub mod method;
 pub mod obstacle;
 pub(crate) mod ordering;
@@ -44,6 +47,7 @@ pub(crate) mod xpbd;
 
 pub use contact::{ContactSettings, Surroundings};
 pub use integrators::CgSettings;
+pub use material::{GasBody, Materials, PackedMuscle, PackedPlastic};
 pub use method::{Integrator, Iterations};
 pub use obstacle::{Placed, Pose, Shape};
 pub use pairs::{PairReport, Pairs};

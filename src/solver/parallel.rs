@@ -530,6 +530,57 @@ impl PairPass for SpringForces<'_> {
     }
 }
 
+/// The spring forces at positions `x` with each spring's dashpot (`dashpot[i]` for spring i of
+/// `springs`, the whole packed list) at velocities `v`: one pass, one length and direction a
+/// spring, where a separate dashpot pass would gather and scatter again (and serially).
+struct DampedSpringForces<'x> {
+    x: &'x [DVec2],
+    v: &'x [DVec2],
+    springs: &'x [PackedSpring],
+    dashpot: &'x [f64],
+}
+
+impl PairPass for DampedSpringForces<'_> {
+    type Pair = PackedSpring;
+    #[inline(always)]
+    fn run(&self, springs: &[PackedSpring], add: impl FnMut(usize, DVec2)) {
+        // `springs` is a run of `self.springs` (the scatter hands out parts of the list it was
+        // given): its first spring's index there.
+        let first = (springs.as_ptr() as usize - self.springs.as_ptr() as usize)
+            / std::mem::size_of::<PackedSpring>();
+        let dashpot = &self.dashpot[first..first + springs.len()];
+        let mut i = 0;
+        super::spring::scatter_pairs(
+            springs,
+            |s| {
+                let c = dashpot[i];
+                i += 1;
+                super::spring::damped_spring_force(s, c, self.x, self.v)
+            },
+            add,
+        );
+    }
+}
+
+/// f = init + Σ spring forces with their dashpots (see [`spring_forces_from`]): `dashpot`
+/// holds each spring's c, in the packed order.
+pub fn damped_spring_forces_from(
+    threads: &Threads,
+    buffers: &mut SpringBuffers,
+    f: &mut [DVec2],
+    (x, v): (&[DVec2], &[DVec2]),
+    (springs, dashpot): (&[PackedSpring], &[f64]),
+    init: &(impl Fn(usize, &mut [DVec2]) + Sync),
+) {
+    let pass = DampedSpringForces {
+        x,
+        v,
+        springs,
+        dashpot,
+    };
+    scatter_from(threads, buffers, f, springs, &pass, init);
+}
+
 /// f += Σ spring forces, each spring evaluated once, on the pool's threads when worthwhile
 /// (the tests' reference for [`spring_forces_from`]).
 #[cfg(test)]

@@ -172,7 +172,6 @@ impl Projective {
         }
         let start = Instant::now();
         let n = s.x.len();
-        let h2 = dt * dt;
         self.row.clear();
         self.particle.clear();
         for (i, &w) in s.inv_mass.iter().enumerate() {
@@ -186,9 +185,9 @@ impl Projective {
         let rows = self.particle.len();
         let mut diagonal: Vec<f64> = self.particle.iter().map(|&i| s.mass[i as usize]).collect();
         let mut entries = Vec::with_capacity(rows + s.springs.len());
-        for sp in &s.springs {
+        for (spring, sp) in s.springs.iter().enumerate() {
             let (ra, rb) = (self.row[sp.a as usize], self.row[sp.b as usize]);
-            let c = h2 * sp.k;
+            let c = s.materials.projective_weight(spring, sp, dt);
             match (ra != u32::MAX, rb != u32::MAX) {
                 (true, true) => {
                     diagonal[ra as usize] += c;
@@ -516,6 +515,10 @@ impl Projective {
                 &local,
                 &start,
             );
+            if s.materials.exerts_forces() {
+                s.materials
+                    .add_projective_terms(&s.springs, &s.x, &self.z, dt, &mut self.r);
+            }
             let global = GlobalStep {
                 factor: &self.factor,
                 order: &self.order,

@@ -22,6 +22,20 @@ pub fn spring_force(s: &PackedSpring, x: &[DVec2]) -> Option<DVec2> {
     Some(d * (-s.k * (l - s.rest) / l))
 }
 
+/// The force on end a of a spring with a dashpot `c` (N·s/m) along it: the spring's force
+/// ([`spring_force`]) and −c ((v_a − v_b)·n) n, n = d/l, from one length and one direction.
+#[inline]
+pub fn damped_spring_force(s: &PackedSpring, c: f64, x: &[DVec2], v: &[DVec2]) -> Option<DVec2> {
+    let (a, b) = (s.a as usize, s.b as usize);
+    let d = x[a] - x[b];
+    let l = d.length();
+    if l < MIN_SPRING_LENGTH {
+        return None;
+    }
+    let n = d / l;
+    Some(n * (-s.k * (l - s.rest) - c * (v[a] - v[b]).dot(n)))
+}
+
 /// One spring's share of projective dynamics' residual at its end a: h²k (d − l) with
 /// l = x_a − x_b and d = l (L / |l|) its local step's projection, computed as
 /// l · (L / |l| − 1) · h²k; 0 where |l| is 0 or not a number (the ends coincide: no direction

@@ -9,7 +9,17 @@
 //!
 //! Limits on h·ω for an undamped oscillator: symplectic Euler and velocity Verlet 2, RK4
 //! 2√2 ≈ 2.83, implicit Euler none. Explicit Euler grows every mode by sqrt(1 + h²ω²) per
-//! step, so it is stable only thanks to damping: (1 + h²ω²) e^(−2μh) < 1, about h < 2μ/ω².
+//! step, so it is stable only thanks to damping. The damping scales the velocity alone by
+//! e^(−μh), so the one-step map's determinant, the square of its eigenvalues' modulus, is
+//! (1 + h²ω²) e^(−μh): stable while that is below 1, about h < μ/ω².
+//!
+//! Dashpots damp a mode in proportion to its stiffness: where every spring has the same ratio
+//! c/k, the damping matrix is (c/k) K and the fastest mode obeys x'' + γ x' + ω² x = 0 with
+//! γ = (c/k) ω² (Rayleigh damping). An explicit method that evaluates that force can fail
+//! through it: explicit damping at rate γ needs h γ below about 2. With dashpots the limit is
+//! found for that oscillator, with the largest c/k of the scene, from each method's own
+//! one-step map ([`stable_dt_damped`]): the largest h below which its spectral radius stays
+//! at most 1.
 
 use super::method::{Integrator, Iterations};
 use super::state::State;
@@ -35,6 +45,9 @@ pub struct StabilityEstimate {
     /// damping μ ([`amplitude_kept`]): below 1 for the implicit methods, the cost of their
     /// stability.
     pub fastest_mode_kept: f64,
+    /// The dashpots' damping rate γ = (c/k)_max ω² of the fastest mode, 1/s (0 without
+    /// dashpots).
+    pub dashpot_rate: f64,
 }
 
 impl StabilityEstimate {
@@ -184,8 +197,8 @@ pub fn limit(integrator: Integrator, dt: f64, damping: f64) -> f64 {
         Integrator::ImplicitEuler | Integrator::ProjectiveDynamics | Integrator::Xpbd => {
             f64::INFINITY
         }
-        // (1 + (hω)²) e^(−2μh) < 1  ⇔  hω < sqrt(e^(2μh) − 1).
-        Integrator::ExplicitEuler => ((2.0 * damping * dt).exp() - 1.0).max(0.0).sqrt(),
+        // (1 + (hω)²) e^(−μh) < 1  ⇔  hω < sqrt(e^(μh) − 1).
+        Integrator::ExplicitEuler => ((damping * dt).exp() - 1.0).max(0.0).sqrt(),
     }
 }
 
@@ -201,9 +214,9 @@ pub fn stable_dt(integrator: Integrator, omega: f64, damping: f64) -> f64 {
             if damping <= 0.0 {
                 return 0.0;
             }
-            // ln(1 + h²ω²) − 2μh < 0 holds on (0, h*): bisect for h*.
-            let unstable = |h: f64| (h * omega).powi(2).ln_1p() - 2.0 * damping * h >= 0.0;
-            let (mut lo, mut hi) = (0.0, 2.0 * damping / (omega * omega) * 4.0 + 1e-12);
+            // ln(1 + h²ω²) − μh < 0 holds on (0, h*): bisect for h*.
+            let unstable = |h: f64| (h * omega).powi(2).ln_1p() - damping * h >= 0.0;
+            let (mut lo, mut hi) = (0.0, damping / (omega * omega) * 4.0 + 1e-12);
             while !unstable(hi) && hi < 1e6 {
                 hi *= 2.0;
             }
@@ -215,6 +228,101 @@ pub fn stable_dt(integrator: Integrator, omega: f64, damping: f64) -> f64 {
         }
         _ => limit(integrator, 0.0, 0.0) / omega,
     }
+}
+
+/// The largest ratio c/k of a spring's dashpot to its stiffness, s: the factor that turns a
+/// mode's ω² into its dashpot damping rate (0 without dashpots).
+pub fn dashpot_ratio(s: &State) -> f64 {
+    (s.springs.iter().zip(s.materials.dashpot()))
+        .filter(|(sp, _)| sp.k > 0.0 && sp.k.is_finite())
+        .map(|(sp, c)| c / sp.k)
+        .fold(0.0, f64::max)
+}
+
+/// One step of the method on the test oscillator x'' = −ω² x − γ x', then the air damping's
+/// factor `decay`, as the step's passes do it.
+fn step_oscillator(
+    integrator: Integrator,
+    h: f64,
+    (omega2, gamma, decay): (f64, f64, f64),
+    (x, v): (f64, f64),
+) -> (f64, f64) {
+    let a = |x: f64, v: f64| -omega2 * x - gamma * v;
+    match integrator {
+        Integrator::ExplicitEuler => (x + h * v, (v + h * a(x, v)) * decay),
+        Integrator::SymplecticEuler => {
+            let v1 = (v + h * a(x, v)) * decay;
+            (x + h * v1, v1)
+        }
+        Integrator::VelocityVerlet => {
+            let v_half = v + 0.5 * h * a(x, v);
+            let x1 = x + h * v_half;
+            // The predicted v1, then the corrected half kick (see the integrator).
+            let predicted = v_half + 0.5 * h * a(x1, v_half);
+            let v1 = v_half + 0.5 * h * (a(x1, v_half) - gamma * (predicted - v_half));
+            (x1, v1 * decay)
+        }
+        _ => {
+            // RK4 on (x, v).
+            let k1 = (v, a(x, v));
+            let k2 = (
+                v + 0.5 * h * k1.1,
+                a(x + 0.5 * h * k1.0, v + 0.5 * h * k1.1),
+            );
+            let k3 = (
+                v + 0.5 * h * k2.1,
+                a(x + 0.5 * h * k2.0, v + 0.5 * h * k2.1),
+            );
+            let k4 = (v + h * k3.1, a(x + h * k3.0, v + h * k3.1));
+            let x1 = x + h / 6.0 * (k1.0 + 2.0 * k2.0 + 2.0 * k3.0 + k4.0);
+            let v1 = v + h / 6.0 * (k1.1 + 2.0 * k2.1 + 2.0 * k3.1 + k4.1);
+            (x1, v1 * decay)
+        }
+    }
+}
+
+/// The spectral radius of the method's one-step map on the test oscillator.
+fn spectral_radius(integrator: Integrator, h: f64, omega: f64, gamma: f64, mu: f64) -> f64 {
+    let coefficients = (omega * omega, gamma, (-mu * h).exp());
+    let (a, c) = step_oscillator(integrator, h, coefficients, (1.0, 0.0));
+    let (b, d) = step_oscillator(integrator, h, coefficients, (0.0, 1.0));
+    let (trace, det) = (a + d, a * d - b * c);
+    let disc = trace * trace - 4.0 * det;
+    if disc >= 0.0 {
+        let r = disc.sqrt();
+        ((trace + r) / 2.0).abs().max(((trace - r) / 2.0).abs())
+    } else {
+        det.abs().sqrt()
+    }
+}
+
+/// The largest stable dt for frequency ω when the dashpots damp that mode at rate
+/// `ratio`·ω² and the air at μ: the first step size at which the method's one-step map
+/// grows (geometric search, then bisection). With `ratio` 0 it is [`stable_dt`].
+pub fn stable_dt_damped(integrator: Integrator, omega: f64, damping: f64, ratio: f64) -> f64 {
+    if ratio <= 0.0 || omega <= 0.0 || integrator.unconditionally_stable() {
+        return stable_dt(integrator, omega, damping);
+    }
+    let gamma = ratio * omega * omega;
+    let unstable = |h: f64| spectral_radius(integrator, h, omega, gamma, damping) > 1.0 + 1e-12;
+    // Every explicit method is stable below both 1/ω and 1/γ by a wide margin.
+    let mut lo = 1e-3 / (omega + gamma);
+    if unstable(lo) {
+        return 0.0;
+    }
+    let mut hi = lo * 1.25;
+    while !unstable(hi) {
+        lo = hi;
+        hi *= 1.25;
+        if hi > 1e6 {
+            return f64::INFINITY;
+        }
+    }
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if unstable(mid) { hi = mid } else { lo = mid }
+    }
+    lo
 }
 
 /// The full estimate for a state, an integrator at step `dt` with damping μ, and its
@@ -229,13 +337,25 @@ pub fn estimate(
     let omega_bound = omega_bound(s);
     let omega_estimate = omega_estimate(s, 60);
     let h_omega = dt * omega_estimate;
+    let ratio = dashpot_ratio(s);
+    let (limit, stable_dt) = if ratio > 0.0 && !integrator.unconditionally_stable() {
+        // The limit on hω that the stable dt means, for this scene's fastest mode.
+        let stable = stable_dt_damped(integrator, omega_estimate, damping, ratio);
+        (stable * omega_estimate, stable)
+    } else {
+        (
+            limit(integrator, dt, damping),
+            stable_dt(integrator, omega_estimate, damping),
+        )
+    };
     StabilityEstimate {
         omega_bound,
         omega_estimate,
         h_omega,
-        limit: limit(integrator, dt, damping),
-        stable_dt: stable_dt(integrator, omega_estimate, damping),
+        limit,
+        stable_dt,
         fastest_mode_kept: amplitude_kept(integrator, h_omega, iterations),
+        dashpot_rate: ratio * omega_estimate * omega_estimate,
     }
 }
 
@@ -257,5 +377,38 @@ pub fn amplitude_kept(integrator: Integrator, h_omega: f64, iterations: Iteratio
         }
         Integrator::ExplicitEuler => (1.0 + h_omega * h_omega).sqrt(),
         Integrator::SymplecticEuler | Integrator::VelocityVerlet | Integrator::Rk4 => 1.0,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// With vanishing dashpots the one-step maps find each method's known edge (2/ω, 2√2/ω,
+    /// explicit Euler's from μ); strong dashpots bring the edge in, toward 2/γ for the Euler
+    /// methods.
+    #[test]
+    fn the_damped_edge_meets_the_known_ones() {
+        let omega = 300.0;
+        for (integrator, mu) in [
+            (Integrator::SymplecticEuler, 0.0),
+            (Integrator::VelocityVerlet, 0.0),
+            (Integrator::Rk4, 0.0),
+            (Integrator::ExplicitEuler, 10.0),
+        ] {
+            let known = stable_dt(integrator, omega, mu);
+            let found = stable_dt_damped(integrator, omega, mu, 1e-12);
+            assert!(
+                (found / known - 1.0).abs() < 1e-6,
+                "{integrator}: {found} against {known}"
+            );
+        }
+        // c/k = 0.01 s: γ = 900/s at ω = 300, so 2/γ = 2.2 ms is below 2/ω = 6.7 ms.
+        let found = stable_dt_damped(Integrator::SymplecticEuler, omega, 0.0, 0.01);
+        let gamma = 0.01 * omega * omega;
+        assert!(
+            found < 2.0 / omega && found <= 2.0 / gamma * 1.01,
+            "{found}"
+        );
     }
 }

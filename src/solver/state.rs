@@ -5,6 +5,7 @@
 //! file) is the adapter's business: the Bevy layer keeps the entities beside it
 //! ([`crate::sim::Solver`]) and rebuilds or patches it when they change.
 
+use super::material::Materials;
 use glam::DVec2;
 
 /// A spring between two dense particle indices.
@@ -50,9 +51,13 @@ pub struct State {
     pub(crate) applied_override: Option<f64>,
     /// Set by the position update when the step produced a non-finite position or velocity.
     pub(crate) non_finite: bool,
-    /// Bumped whenever the spring graph, a stiffness, a mass or a pin changes: the methods
-    /// that precompute from these (projective dynamics' factor, XPBD's colouring) redo it.
+    /// Bumped whenever the spring graph, a stiffness, a dashpot, a mass or a pin changes: the
+    /// methods that precompute from these (projective dynamics' factor, XPBD's colouring)
+    /// redo it.
     pub(crate) revision: u64,
+    /// Dashpots, gas bodies, muscles and plastic springs ([`Materials`]); empty lists when the
+    /// scene has none.
+    pub(crate) materials: Materials,
 }
 
 /// Read access: the adapter writes the state and the passes step it.
@@ -97,6 +102,10 @@ impl State {
     /// The packed springs (ends as dense particle indices; `k` the stiffness in effect).
     pub fn springs(&self) -> &[PackedSpring] {
         &self.springs
+    }
+    /// The materials beyond the Hooke spring.
+    pub fn materials(&self) -> &Materials {
+        &self.materials
     }
     /// Marks the spring graph, a stiffness, a mass or a pin as changed.
     pub(crate) fn touch(&mut self) {
@@ -179,7 +188,8 @@ impl State {
         &mut self.drift
     }
 
-    /// Total mechanical energy: Σ ½m|v|² − Σ m g·x + Σ ½k(|xa−xb|−L)².
+    /// Total mechanical energy: Σ ½m|v|² − Σ m g·x + Σ ½k(|xa−xb|−L)², and −nRT ln A for each
+    /// gas body.
     pub fn energy(&self, gravity: DVec2) -> Energy {
         let mut kinetic = 0.0;
         let mut potential_gravity = 0.0;
@@ -196,6 +206,7 @@ impl State {
             kinetic,
             potential_gravity,
             potential_springs,
+            potential_gas: self.materials.gas_energy(&self.x),
         }
     }
 
@@ -214,11 +225,13 @@ pub struct Energy {
     pub potential_gravity: f64,
     /// Σ ½ k (|x_a − x_b| − L)², J.
     pub potential_springs: f64,
+    /// −Σ nRT ln A over the gas bodies, J (0 without them).
+    pub potential_gas: f64,
 }
 
 impl Energy {
-    /// The sum of the three.
+    /// The sum of them all.
     pub fn total(&self) -> f64 {
-        self.kinetic + self.potential_gravity + self.potential_springs
+        self.kinetic + self.potential_gravity + self.potential_springs + self.potential_gas
     }
 }

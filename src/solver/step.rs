@@ -3,9 +3,13 @@
 //! A step runs these passes in order (the Bevy layer runs each as a system in its public set,
 //! [`crate::sim::StepSystems`], so that users can order their own systems between them):
 //!
+//! 0. **Actuate** ([`actuate`]): only with muscles, each muscle's rest length for the step.
 //! 1. **Forces** ([`forces`]): f = m g + f_ext + Σ springs at the start-of-step positions, each
-//!    spring evaluated once and scattered to its two ends. Methods that work on positions
-//!    (projective dynamics, XPBD) take only the body forces m g + f_ext ([`body_forces`]).
+//!    spring evaluated once and scattered to its two ends, then, when the scene has them, the
+//!    dashpots at the start-of-step velocities and the gas pressure
+//!    ([`super::material`]). Methods that work on positions (projective dynamics, XPBD) take
+//!    only the body forces m g + f_ext ([`body_forces`]) and treat the materials in their
+//!    solves.
 //! 2. **Integrate** ([`integrate`]): the integrator's end-of-step velocity v1, and the drift
 //!    velocity u the position update moves with:
 //!
@@ -38,6 +42,8 @@
 //!    swept test of its path so that it cannot pass through a thin one, and its velocity
 //!    relative to the surface loses its approach (keeping the restitution's share) and up to
 //!    μ times that of its sliding ([`super::contact`]).
+//! 7. **Yield** ([`yield_springs`]): only with plastic springs, each strained past its yield
+//!    moves its rest length toward its length.
 //!
 //! By default the Bevy layer runs passes 2 (the Euler kick only: the other methods' solves run
 //! before) to 5 as one sweep over the particles ([`sweep`]), assembled from the passes in use,
@@ -176,8 +182,21 @@ pub fn body_forces(s: &mut State, gravity: DVec2, threads: &Threads) {
 /// springs' (bit for bit [`body_forces`] then the spring pass).
 pub fn forces(s: &mut State, w: &mut Workspace, gravity: DVec2, threads: &Threads) {
     let mut f = std::mem::take(&mut s.f);
-    integrators::forces_at(s, &mut w.scratch.pairs, &mut f, &s.x, gravity, threads);
+    let xv = (&s.x[..], &s.v[..]);
+    integrators::forces_at(s, &mut w.scratch.pairs, &mut f, xv, gravity, threads);
     s.f = f;
+}
+
+/// Pass 0, muscles: every muscle's rest length for the step that starts at time `t`
+/// (held over the step, as a controller's command is).
+pub fn actuate(s: &mut State, t: f64) {
+    s.materials.actuate(&mut s.springs, t);
+}
+
+/// Pass 7, plasticity: every plastic spring strained past its yield moves its rest length
+/// toward its length. Returns whether any moved.
+pub fn yield_springs(s: &mut State, dt: f64) -> bool {
+    s.materials.yield_springs(&mut s.springs, &s.x, dt)
 }
 
 /// Keeps the start-of-step velocity as the drift: explicit Euler's position update moves with

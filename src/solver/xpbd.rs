@@ -56,6 +56,17 @@ struct Multiplier {
     lambda: f64,
 }
 
+/// A dashpot's damped projection (Macklin et al. 2016, eq. 26): with γ = α̃ β̃/hₛ = α c/hₛ,
+/// Δλ = (−C − α̃λ − γ ∇C·(x − p)) / ((1 + γ)(w_a + w_b) + α̃). The coefficients play the
+/// undamped ones' parts: x_a += (w_a/den) g n with den the damped denominator.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct Damped {
+    gamma: f64,
+    ca: f64,
+    cb: f64,
+    inv_den: f64,
+}
+
 /// The colouring and buffers, kept from step to step.
 #[derive(Debug, Default, Clone)]
 pub struct Xpbd {
@@ -69,6 +80,14 @@ pub struct Xpbd {
     colour_starts: Vec<usize>,
     /// Per constraint, in the same order, its compliance and multiplier.
     multipliers: Vec<Multiplier>,
+    /// Per constraint, the packed spring it stands for; and per packed spring, its constraint.
+    spring_of: Vec<u32>,
+    slot_of: Vec<u32>,
+    /// Per constraint, the damped projection's coefficients, when some spring has a dashpot
+    /// (else empty).
+    damped: Vec<Damped>,
+    /// The gas forces of the current substep, when the scene has gas bodies (else empty).
+    gas: Vec<DVec2>,
     /// Positions during the step, and at the start of the substep.
     x: Vec<DVec2>,
     prev: Vec<DVec2>,
@@ -134,8 +153,12 @@ impl Xpbd {
         let mut at = counts;
         self.constraints = vec![Constraint::default(); s.springs.len()];
         self.multipliers = vec![Multiplier::default(); s.springs.len()];
-        for (sp, &c) in s.springs.iter().zip(&colour_of) {
+        self.spring_of = vec![0; s.springs.len()];
+        self.slot_of = vec![0; s.springs.len()];
+        for (i, (sp, &c)) in s.springs.iter().zip(&colour_of).enumerate() {
             let slot = &mut at[c as usize];
+            self.spring_of[*slot] = i as u32;
+            self.slot_of[i] = *slot as u32;
             self.constraints[*slot] = Constraint {
                 a: sp.a,
                 b: sp.b,
@@ -171,7 +194,52 @@ impl Xpbd {
             c.ca = wa * m.inv_den;
             c.cb = wb * m.inv_den;
         }
+        self.damped.clear();
+        if s.materials.has_dashpots() {
+            let dashpot = s.materials.dashpot();
+            for ((c, m), &spring) in self
+                .constraints
+                .iter()
+                .zip(&self.multipliers)
+                .zip(&self.spring_of)
+            {
+                let (wa, wb) = (w[c.a as usize], w[c.b as usize]);
+                let gamma = m.compliance * dashpot[spring as usize] / hs;
+                let d = if m.inv_den == 0.0 || !gamma.is_finite() {
+                    Damped {
+                        gamma: 0.0,
+                        ca: c.ca,
+                        cb: c.cb,
+                        inv_den: m.inv_den,
+                    }
+                } else {
+                    let den = (1.0 + gamma) * (wa + wb) + m.alpha;
+                    Damped {
+                        gamma,
+                        ca: wa / den,
+                        cb: wb / den,
+                        inv_den: 1.0 / den,
+                    }
+                };
+                self.damped.push(d);
+            }
+        }
         self.coefficients = Some(key);
+    }
+
+    /// The rest lengths of the constraints whose springs' rest lengths move (muscles, plastic
+    /// springs), from the packed springs.
+    fn refresh_rest_lengths(&mut self, s: &State) {
+        let m = &s.materials;
+        let springs = m
+            .muscles()
+            .iter()
+            .map(|m| m.spring)
+            .chain(m.plastic().iter().map(|p| p.spring));
+        for i in springs {
+            let slot = self.slot_of[i as usize] as usize;
+            self.constraints[slot].rest = s.springs[i as usize].rest;
+        }
     }
 }
 
@@ -399,6 +467,59 @@ fn project_with_multipliers(
     }
 }
 
+/// A sweep over constraints with dashpots (see [`Damped`]), from the substep's start `prev`;
+/// λ is kept in `multipliers` when there are several sweeps a substep.
+fn project_damped(
+    constraints: &[Constraint],
+    damped: &[Damped],
+    mut multipliers: Option<&mut [Multiplier]>,
+    x: Positions,
+    prev: Positions,
+) {
+    for (k, (c, d)) in constraints.iter().zip(damped).enumerate() {
+        let (a, b) = (c.a as usize, c.b as usize);
+        // SAFETY: a and b belong to this constraint alone within the colour.
+        let (xa, xb) = unsafe { (x.get(a), x.get(b)) };
+        let l = xa - xb;
+        let len = l.length();
+        if len == 0.0 {
+            continue;
+        }
+        let n = l / len;
+        // SAFETY: the substep's start positions are only read during the sweeps.
+        let (pa, pb) = unsafe { (prev.get(a), prev.get(b)) };
+        let moved = n.dot((xa - pa) - (xb - pb));
+        let mut g = c.rest - len - d.gamma * moved;
+        if let Some(m) = multipliers.as_deref_mut().map(|m| &mut m[k]) {
+            g -= m.alpha * m.lambda;
+            m.lambda += g * d.inv_den;
+        }
+        // SAFETY: as above.
+        unsafe {
+            x.set(a, xa + n * (d.ca * g));
+            x.set(b, xb - n * (d.cb * g));
+        }
+    }
+}
+
+/// The prediction of one particle (see the module docs): `end` is where the sweeps left it.
+#[inline(always)]
+fn predict(
+    (x, prev, v): (&mut DVec2, &mut DVec2, &mut DVec2),
+    f: DVec2,
+    w: f64,
+    (hs, inv_hs, floor, previous): (f64, f64, f64, bool),
+) {
+    // The sweeps may have pulled a particle on the ground below it.
+    let end = on_ground(*x, w, floor);
+    if previous && w != 0.0 {
+        *v = (end - *prev) * inv_hs;
+    }
+    *v += f * (hs * w);
+    *prev = end;
+    *x = on_ground(end + *v * hs, w, floor);
+}
+
 /// One XPBD step (see the module docs): sets v to the end velocity and the drift to the mean
 /// velocity over the step. `s.f` holds the body forces.
 pub fn step(
@@ -424,6 +545,15 @@ pub fn step(
     let inv_hs = 1.0 / hs;
     let floor = ground.unwrap_or(f64::NEG_INFINITY);
     xp.prepare(s, hs);
+    if s.materials.moves_rest_lengths() {
+        xp.refresh_rest_lengths(s);
+    }
+    let has_gas = !s.materials.gas().is_empty();
+    xp.gas.clear();
+    if has_gas {
+        xp.gas.resize(n, DVec2::ZERO);
+    }
+    let materials = &s.materials;
     // Particle pairs, pushed apart after each substep's sweeps on one member while the others
     // wait (the pass is short: only the particles with listed neighbours), so that the push
     // enters the next substep's velocity as the constraints' do.
@@ -446,14 +576,29 @@ pub fn step(
         Shared::new(&mut s.v),
     );
     let multipliers = Shared::new(&mut xp.multipliers);
+    let gas = Shared::new(&mut xp.gas);
+    // The substep's start positions, which the damped projection reads (written only by the
+    // predictions, before their barrier).
+    let starts = prev;
     let (f, w) = (&s.f[..], &s.inv_mass[..]);
     let (constraints, colour_starts) = (&xp.constraints[..], &xp.colour_starts[..]);
+    let damped = &xp.damped[..];
     threads.team(springs, |team| {
         let mine = team.share(0..n);
         for substep in 0..substeps {
             // The prediction, v += hₛ f/m, p = x, x += hₛ v; after the first substep fused
             // with the previous one's velocity, v = (x − p)/hₛ.
             let previous = substep > 0;
+            if has_gas {
+                // The gas forces at the substep's start, on one member (a body's loop is
+                // short) while the others wait.
+                if !team.share(0..1).is_empty() {
+                    // SAFETY: the other members wait at the barrier below, touching nothing.
+                    let (x, out) = unsafe { (positions.part(0..n), gas.part(0..n)) };
+                    materials.gas_forces_into(x, out);
+                }
+                team.wait();
+            }
             // SAFETY: this member's particles (see above).
             let (x, prev, v) = unsafe {
                 (
@@ -463,25 +608,36 @@ pub fn step(
                 )
             };
             let (f, w) = (&f[mine.clone()], &w[mine.clone()]);
+            let at = (hs, inv_hs, floor, previous);
             // Zipped, so that no index is bounds-checked (the checks kept this loop scalar
             // and cost a fifth of the step).
             let particles = x.iter_mut().zip(prev.iter_mut()).zip(v.iter_mut());
-            for (((x, prev), v), (f, &w)) in particles.zip(f.iter().zip(w)) {
-                // The sweeps may have pulled a particle on the ground below it.
-                let end = on_ground(*x, w, floor);
-                if previous && w != 0.0 {
-                    *v = (end - *prev) * inv_hs;
+            if has_gas {
+                // SAFETY: this member's particles; the gas forces were written before the
+                // barrier above.
+                let extra = unsafe { gas.part(mine.clone()) };
+                for ((((x, prev), v), (f, &w)), g) in particles.zip(f.iter().zip(w)).zip(extra) {
+                    predict((x, prev, v), *f + *g, w, at);
                 }
-                *v += *f * (hs * w);
-                *prev = end;
-                *x = on_ground(end + *v * hs, w, floor);
+            } else {
+                for (((x, prev), v), (f, &w)) in particles.zip(f.iter().zip(w)) {
+                    predict((x, prev, v), *f, w, at);
+                }
             }
             team.wait();
             for sweep in 0..sweeps {
                 for colour in colour_starts.windows(2) {
                     let range = team.share(colour[0]..colour[1]);
                     let constraints = &constraints[range.clone()];
-                    if sweeps > 1 {
+                    if !damped.is_empty() {
+                        // SAFETY: this member's constraints of the colour.
+                        let mut m =
+                            (sweeps > 1).then(|| unsafe { multipliers.part(range.clone()) });
+                        if let Some(m) = m.as_deref_mut().filter(|_| sweep == 0) {
+                            m.iter_mut().for_each(|m| m.lambda = 0.0);
+                        }
+                        project_damped(constraints, &damped[range], m, positions, starts);
+                    } else if sweeps > 1 {
                         // SAFETY: this member's constraints of the colour (see above).
                         let m = unsafe { multipliers.part(range) };
                         if sweep == 0 {

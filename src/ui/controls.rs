@@ -25,6 +25,10 @@ pub const CONTROLS: &[(&str, &str)] = &[
     ("B + left drag", "build a box obstacle: corner to corner"),
     ("L + left drag", "build a segment obstacle: end to end"),
     (
+        "J + left drag",
+        "draw a ball (a ring filled with gas): centre, then radius",
+    ),
+    (
         "left press on an obstacle",
         "move it; what rests on it follows by friction",
     ),

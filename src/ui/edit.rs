@@ -56,7 +56,7 @@ pub fn delete_particle<'a>(
     commands.entity(particle).despawn();
 }
 
-/// Removes every particle and spring.
+/// Removes every particle, spring and pressure body.
 pub fn clear(commands: &mut Commands, entities: impl IntoIterator<Item = Entity>) {
     commands.queue(history::before("clear"));
     for e in entities {
@@ -72,6 +72,38 @@ pub fn cut(commands: &mut Commands, springs: &[Entity], first_of_stroke: bool) {
     for &e in springs {
         commands.entity(e).try_despawn();
     }
+}
+
+/// The spacing of a drawn ball's particles, m.
+const BALL_SPACING: f64 = 0.02;
+/// A drawn ball's particle mass, kg.
+const BALL_MASS: f64 = 0.05;
+/// How far the gas inflates a drawn ball's springs past their rest length.
+const BALL_INFLATION: f64 = 0.1;
+
+/// Adds a ball: a ring of particles round `center` whose springs (of `stiffness`) are at rest
+/// at `radius`, filled with a gas that stretches them by [`BALL_INFLATION`]. For N sides of
+/// rest length L₀ and stretched side s = (1 + ε) L₀, the balance N k (s − L₀) = 2 nRT/s of
+/// `docs/integrators.md` gives nRT = N k s (s − L₀)/2.
+pub fn add_ball(commands: &mut Commands, center: DVec2, radius: f64, stiffness: f64) {
+    use std::f64::consts::TAU;
+    commands.queue(history::before("ball"));
+    let n = ((TAU * radius / BALL_SPACING).round() as usize).clamp(8, 64);
+    let particles: Vec<Entity> = (0..n)
+        .map(|i| {
+            let at = center + DVec2::from_angle(TAU * i as f64 / n as f64) * radius;
+            let particle = (Particle, Position(at), Mass(BALL_MASS));
+            commands.spawn(particle).id()
+        })
+        .collect();
+    let rest = 2.0 * radius * (TAU / (2.0 * n as f64)).sin();
+    for i in 0..n {
+        let (a, b) = (particles[i], particles[(i + 1) % n]);
+        commands.spawn(Spring::new(a, b, rest, stiffness));
+    }
+    let side = (1.0 + BALL_INFLATION) * rest;
+    let nrt = n as f64 * stiffness * side * (side - rest) / 2.0;
+    commands.spawn(PressureBody { particles, nrt });
 }
 
 /// Adds an obstacle of `shape` centred at `center`, unrotated and at rest.

@@ -9,8 +9,8 @@
 //! ([`record_burst`]); discrete edits (clicks, keys) are one entry each ([`record`]).
 
 use crate::scene::{
-    Expanded, ObstacleDef, ParticleDef, SpringDef, explicit_state, obstacle_defs, replace_contents,
-    replace_obstacles,
+    Expanded, ObstacleDef, ParticleDef, PressureDef, SpringDef, explicit_state, obstacle_defs,
+    replace_contents, replace_obstacles,
 };
 use crate::sim::{SimClock, SimParams, SimStatus, watch::EnergyWatch};
 use bevy::prelude::*;
@@ -32,6 +32,8 @@ pub struct State {
     pub springs: Arc<Vec<SpringDef>>,
     /// The obstacles at their poses.
     pub obstacles: Vec<ObstacleDef>,
+    /// The gas-filled loops.
+    pub pressure: Vec<PressureDef>,
 }
 
 #[derive(Debug, Clone)]
@@ -84,7 +86,11 @@ impl History {
 /// The world's state now, with `params` in place of the current parameters when given.
 fn capture(world: &mut World, params: Option<SimParams>) -> State {
     let params = params.unwrap_or_else(|| world.resource::<SimParams>().clone());
-    let Expanded { particles, springs } = explicit_state(world, None);
+    let Expanded {
+        particles,
+        springs,
+        pressure,
+    } = explicit_state(world, None);
     let springs = world.resource::<History>().shared_springs(springs);
     State {
         params,
@@ -92,6 +98,7 @@ fn capture(world: &mut World, params: Option<SimParams>) -> State {
         particles,
         springs,
         obstacles: obstacle_defs(world),
+        pressure,
     }
 }
 
@@ -154,6 +161,7 @@ fn restore(world: &mut World, state: &State) {
     let expanded = Expanded {
         particles: state.particles.clone(),
         springs: state.springs.to_vec(),
+        pressure: state.pressure.clone(),
     };
     replace_contents(world, params, &expanded);
     if obstacle_defs(world) != state.obstacles {

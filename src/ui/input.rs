@@ -13,7 +13,7 @@ use bevy::prelude::*;
 use bevy_egui::input::EguiWantsInput;
 
 /// Particles and springs: what C clears.
-type ParticleOrSpring = Or<(With<Particle>, With<Spring>)>;
+type ParticleOrSpring = Or<(With<Particle>, With<Spring>, With<PressureBody>)>;
 
 /// G / Space: pause or resume. N: one step while paused. R: reset. S: save. C: clear. F: fit.
 /// H / ?: help. Ctrl+Z, Ctrl+Shift+Z, Ctrl+Y: undo, redo.

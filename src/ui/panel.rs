@@ -51,6 +51,27 @@ impl Default for PanelState {
     }
 }
 
+/// What the scene has beyond Hooke springs, in a line ("24 dashpots, 2 gas bodies"), or
+/// `None` when nothing.
+fn materials_line(m: &crate::solver::Materials) -> Option<String> {
+    let count = |n: usize, one: &str, many: &str| match n {
+        0 => None,
+        1 => Some(format!("1 {one}")),
+        n => Some(format!("{n} {many}")),
+    };
+    let dashpots = m.dashpot().iter().filter(|c| **c != 0.0).count();
+    let parts: Vec<String> = [
+        count(dashpots, "dashpot", "dashpots"),
+        count(m.gas().len(), "gas body", "gas bodies"),
+        count(m.muscles().len(), "muscle", "muscles"),
+        count(m.plastic().len(), "plastic spring", "plastic springs"),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    (!parts.is_empty()).then(|| parts.join(", "))
+}
+
 /// The panel's label for what changed between two parameter sets (run state aside), for the
 /// undo history; `None` when nothing did.
 fn edit_label(old: &SimParams, new: &SimParams) -> Option<&'static str> {
@@ -60,6 +81,8 @@ fn edit_label(old: &SimParams, new: &SimParams) -> Option<&'static str> {
         Some("stiffness")
     } else if old.damping != new.damping {
         Some("damping")
+    } else if old.spring_damping != new.spring_damping {
+        Some("spring damping")
     } else if old.dt != new.dt {
         Some("dt")
     } else if old.ground != new.ground {
@@ -258,8 +281,22 @@ pub fn side_panel(
                             if text.len() <= 7 { text } else { field_number(v) }
                         })
                         .suffix(" 1/s"),
-                );
+                )
+                .on_hover_text("air drag: slows every motion, falling included");
                 ui.end_row();
+
+                ui.label("Dashpot c");
+                ui.add(slider(&mut p.spring_damping, 0.0..=20.0).suffix(" N·s/m"))
+                    .on_hover_text(
+                        "a dashpot along every spring without its own: damps the springs' \
+                         vibration and leaves free fall alone",
+                    );
+                ui.end_row();
+                if let Some(line) = materials_line(solver.materials()) {
+                    ui.label("Materials");
+                    ui.small(line);
+                    ui.end_row();
+                }
 
                 ui.label("Time step dt");
                 ui.add(
@@ -413,6 +450,10 @@ pub fn side_panel(
                 row("  kinetic", format!("{} J", number(energy.kinetic, 6)));
                 row("  gravity", format!("{} J", number(energy.potential_gravity, 6)));
                 row("  springs", format!("{} J", number(energy.potential_springs, 6)));
+                if !solver.materials().gas().is_empty() {
+                    // −nRT ln A: its zero is at A = 1 m², so only its changes mean anything.
+                    row("  gas", format!("{} J", number(energy.potential_gas, 6)));
+                }
             });
             ui.separator();
             egui::CollapsingHeader::new("Plots")

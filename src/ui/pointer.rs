@@ -80,6 +80,9 @@ pub enum Build {
     Box,
     /// L: a segment (a line of thickness 0) from where the drag began to the cursor.
     Segment,
+    /// J: a ball (a ring of particles filled with gas, a pressure body), centred where the
+    /// drag began, through the cursor. Not an obstacle: it falls, bounces and squashes.
+    Ball,
 }
 
 impl Build {
@@ -89,6 +92,7 @@ impl Build {
             (KeyCode::KeyO, Build::Circle),
             (KeyCode::KeyB, Build::Box),
             (KeyCode::KeyL, Build::Segment),
+            (KeyCode::KeyJ, Build::Ball),
         ]
         .into_iter()
         .find(|(k, _)| keys.pressed(*k) || keys.just_released(*k))
@@ -100,7 +104,7 @@ impl Build {
     pub fn shape(self, from: DVec2, to: DVec2, least: f64) -> Option<(Shape, DVec2)> {
         let d = to - from;
         match self {
-            Build::Circle => (d.length() >= least).then(|| {
+            Build::Circle | Build::Ball => (d.length() >= least).then(|| {
                 let radius = d.length();
                 (Shape::Circle { radius }, from)
             }),
@@ -320,8 +324,13 @@ pub fn drag(
                 *to = at;
             }
             if !held {
-                if let Some((shape, center)) = kind.shape(*from, *to, cursor.click_slop()) {
-                    edit::add_obstacle(&mut commands, shape, center);
+                match (kind.shape(*from, *to, cursor.click_slop()), *kind) {
+                    (Some((Shape::Circle { radius }, center)), Build::Ball) => {
+                        let stiffness = params.stiffness_override.unwrap_or(DEFAULT_STIFFNESS);
+                        edit::add_ball(&mut commands, center, radius, stiffness);
+                    }
+                    (Some((shape, center)), _) => edit::add_obstacle(&mut commands, shape, center),
+                    (None, _) => {}
                 }
                 *gesture = Gesture::None;
             }

@@ -28,12 +28,7 @@ pub fn particle(x: f64, y: f64, pinned: bool) -> ParticleDef {
 }
 
 pub fn spring(a: usize, b: usize, stiffness: f64, rest: f64) -> SpringDef {
-    SpringDef {
-        a,
-        b,
-        stiffness,
-        rest,
-    }
+    SpringDef::new(a, b, rest, stiffness)
 }
 
 /// A small 2D network under gravity: a pinned particle and three free ones of different
