@@ -213,3 +213,23 @@ fn a_falling_body_keeps_its_neighbour_lists() {
         "a free fall of 0.3 s rebuilt the lists {builds} times"
     );
 }
+
+/// A particle flung out of all proportion (1e300 m/s: a blow-up on its way to being caught)
+/// is hashed into the pair grid without an overflow: its cell is clamped, its neighbours'
+/// too. (The app's random-input hammer found `cx + 1` overflowing on 2026-12-04.)
+#[test]
+fn a_particle_flung_far_is_hashed_without_overflow() {
+    let mut scene = bare_scene(Integrator::SymplecticEuler, 1e-4);
+    scene.contact = pairs_on(0.005, 0.0);
+    scene.particles = vec![
+        particle(0.2, 0.5, false),
+        particle(0.4, 0.5, false),
+        particle(0.6, 0.5, false),
+    ];
+    scene.particles[2].vel = (1e300, -1e300);
+    let mut app = app_with(scene);
+    step(&mut app, 3);
+    // The two at rest are where they were; the flung one is far away, finite or caught.
+    assert_eq!(pos(&app, 0), DVec2::new(0.2, 0.5));
+    assert_eq!(pos(&app, 1), DVec2::new(0.4, 0.5));
+}

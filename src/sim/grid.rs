@@ -25,10 +25,13 @@ impl<T: Copy> SpatialGrid<T> {
         }
     }
 
+    /// A point's cell. Clamped to ±1e12 cells, so that the arithmetic on keys (a box's cell
+    /// count, a query's neighbouring cells) cannot overflow for a point flung far away.
     fn key(&self, p: DVec2) -> (i64, i64) {
+        const LIMIT: f64 = 1e12;
         (
-            (p.x / self.cell).floor() as i64,
-            (p.y / self.cell).floor() as i64,
+            (p.x / self.cell).floor().clamp(-LIMIT, LIMIT) as i64,
+            (p.y / self.cell).floor().clamp(-LIMIT, LIMIT) as i64,
         )
     }
 

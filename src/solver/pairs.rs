@@ -363,7 +363,10 @@ impl Pairs {
                     .flat_map(|a| (-1..=1).map(move |b| (a, b)))
                     .enumerate()
                 {
-                    let h = slot((cx + dx, cy + dy));
+                    // Saturating: a particle flung far (a blow-up on its way to being
+                    // caught) has its cell clamped at i64's ends, and a neighbour of that cell
+                    // must not overflow.
+                    let h = slot((cx.saturating_add(dx), cy.saturating_add(dy)));
                     if seen[..k].contains(&h) {
                         continue;
                     }
