@@ -120,7 +120,13 @@ impl GasBody {
 
     /// Adds P ∂A/∂x_i to every particle's force.
     fn add_forces(&self, x: &[DVec2], f: &mut [DVec2]) {
-        let pressure = self.pressure(x);
+        self.add_scaled_forces(x, f, 1.0);
+    }
+
+    /// Adds `scale` P ∂A/∂x_i to every particle's entry of `f` (scale 1: the forces, whose
+    /// bits it then gives, the product being exact).
+    fn add_scaled_forces(&self, x: &[DVec2], f: &mut [DVec2], scale: f64) {
+        let pressure = self.pressure(x) * scale;
         for (k, &i) in self.particles.iter().enumerate() {
             f[i as usize] += self.gradient(x, k) * pressure;
         }
@@ -204,9 +210,7 @@ impl Materials {
     /// Adds the dashpot and gas forces at positions `x` and velocities `v` to `f`.
     pub fn add_forces(&self, springs: &[PackedSpring], x: &[DVec2], v: &[DVec2], f: &mut [DVec2]) {
         self.add_dashpot_forces(springs, x, v, f);
-        for body in &self.gas {
-            body.add_forces(x, f);
-        }
+        self.add_gas_forces(x, f);
     }
 
     /// Adds the gas forces at positions `x` to `f`.
@@ -214,6 +218,22 @@ impl Materials {
         for body in &self.gas {
             body.add_forces(x, f);
         }
+    }
+
+    /// Each spring with a dashpot and a length: its ends, its unit direction from b to a at
+    /// positions `x`, and its c: what the dashpot's force and its projective term start from.
+    fn dashpots<'a>(
+        &'a self,
+        springs: impl IntoIterator<Item = (usize, usize)> + 'a,
+        x: &'a [DVec2],
+    ) -> impl Iterator<Item = (usize, usize, DVec2, f64)> + 'a {
+        (springs.into_iter().zip(&self.dashpot))
+            .filter(|(_, c)| **c != 0.0)
+            .filter_map(move |((a, b), &c)| {
+                let d = x[a] - x[b];
+                let l = d.length();
+                (l >= MIN_SPRING_LENGTH).then(|| (a, b, d / l, c))
+            })
     }
 
     /// Adds the dashpot forces at positions `x` for velocities `v` (linear in `v`: the
@@ -225,17 +245,8 @@ impl Materials {
         v: &[DVec2],
         f: &mut [DVec2],
     ) {
-        for (s, &c) in springs.iter().zip(&self.dashpot) {
-            if c == 0.0 {
-                continue;
-            }
-            let (a, b) = (s.a as usize, s.b as usize);
-            let d = x[a] - x[b];
-            let l = d.length();
-            if l < MIN_SPRING_LENGTH {
-                continue;
-            }
-            let n = d / l;
+        let ends = springs.iter().map(|s| (s.a as usize, s.b as usize));
+        for (a, b, n, c) in self.dashpots(ends, x) {
             let g = n * (-c * (v[a] - v[b]).dot(n));
             f[a] += g;
             f[b] -= g;
@@ -277,30 +288,14 @@ impl Materials {
         h: f64,
         r: &mut [DVec2],
     ) {
-        for (s, &c) in springs.iter().zip(&self.dashpot) {
-            if c == 0.0 {
-                continue;
-            }
-            let (a, b) = (s.a as usize, s.b as usize);
-            let d0 = x0[a] - x0[b];
-            let l = d0.length();
-            if l < MIN_SPRING_LENGTH {
-                continue;
-            }
-            let n = d0 / l;
+        let ends = springs.iter().map(|s| (s.a as usize, s.b as usize));
+        for (a, b, n, c) in self.dashpots(ends, x0) {
             let g = n * (-h * c * n.dot((z[a] - x0[a]) - (z[b] - x0[b])));
             r[a] += g;
             r[b] -= g;
         }
-        if !self.gas.is_empty() {
-            let start = r.len();
-            let mut f = vec![DVec2::ZERO; start];
-            for body in &self.gas {
-                body.add_forces(z, &mut f);
-            }
-            for (r, f) in r.iter_mut().zip(f) {
-                *r += f * (h * h);
-            }
+        for body in &self.gas {
+            body.add_scaled_forces(z, r, h * h);
         }
     }
 
