@@ -151,6 +151,10 @@ struct RunArgs {
     /// `spring_damping`): damps the springs' vibration, not free fall.
     #[arg(long, value_name = "C")]
     spring_damping: Option<f64>,
+    /// Projective dynamics and VBD: take the damping μ inside the solve as the force −μ m v
+    /// (BDF2 always does), not as exp(−μ dt) after the step.
+    #[arg(long)]
+    drag_in_solve: bool,
     /// Tearing: break springs stretched past (1 + STRAIN) × rest (overrides the scene's).
     #[arg(long, value_name = "STRAIN")]
     tear: Option<f64>,
@@ -163,9 +167,25 @@ struct RunArgs {
     /// XPBD: substeps per step (default 10).
     #[arg(long, value_name = "N")]
     xpbd_substeps: Option<u32>,
-    /// XPBD: constraint sweeps per substep (default 1).
+    /// XPBD: constraint sweeps per substep (default 1; the least, with --xpbd-tolerance).
     #[arg(long, value_name = "N")]
     xpbd_iterations: Option<u32>,
+    /// XPBD: sweep each substep until the largest constraint error |C + α̃λ|/L is under TOL,
+    /// up to --xpbd-max-sweeps (default 0: off).
+    #[arg(long, value_name = "TOL")]
+    xpbd_tolerance: Option<f64>,
+    /// XPBD: the most sweeps a substep runs toward --xpbd-tolerance (default 100).
+    #[arg(long, value_name = "N")]
+    xpbd_max_sweeps: Option<u32>,
+    /// BDF2: local/global iterations per step (default 10).
+    #[arg(long, value_name = "N")]
+    bdf2_iterations: Option<u32>,
+    /// VBD: iterations per step (default 10).
+    #[arg(long, value_name = "N")]
+    vbd_iterations: Option<u32>,
+    /// VBD: Chebyshev acceleration's spectral radius estimate ρ in [0, 1) (default 0: off).
+    #[arg(long, value_name = "RHO")]
+    vbd_chebyshev: Option<f64>,
     /// Solver threads, 1 to 256 (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
@@ -240,11 +260,17 @@ fn run(args: RunArgs) -> ExitCode {
         stiffness: args.stiffness,
         damping: args.damping,
         spring_damping: args.spring_damping,
+        drag_in_solve: args.drag_in_solve,
         tear: args.tear,
         newton_iterations: args.newton_iterations,
         pd_iterations: args.pd_iterations,
         xpbd_substeps: args.xpbd_substeps,
         xpbd_iterations: args.xpbd_iterations,
+        xpbd_tolerance: args.xpbd_tolerance,
+        xpbd_max_sweeps: args.xpbd_max_sweeps,
+        bdf2_iterations: args.bdf2_iterations,
+        vbd_iterations: args.vbd_iterations,
+        vbd_chebyshev: args.vbd_chebyshev,
         threads: args.threads,
         profile: args.profile,
         separate_passes: args.separate_passes,

@@ -31,6 +31,8 @@ pub struct Overrides {
     /// The dashpot c of every spring without its own, N·s/m (overrides the scene's
     /// `spring_damping`).
     pub spring_damping: Option<f64>,
+    /// Take the damping inside the solve (projective dynamics, VBD).
+    pub drag_in_solve: bool,
     /// Tearing strain (overrides the scene's `tear`).
     pub tear: Option<f64>,
     /// Implicit Euler's Newton steps per step (overrides the scene's).
@@ -41,6 +43,16 @@ pub struct Overrides {
     pub xpbd_substeps: Option<u32>,
     /// XPBD's constraint sweeps per substep (overrides the scene's).
     pub xpbd_iterations: Option<u32>,
+    /// XPBD's constraint tolerance (overrides the scene's `xpbd_tolerance`).
+    pub xpbd_tolerance: Option<f64>,
+    /// XPBD's cap on sweeps toward the tolerance (overrides the scene's).
+    pub xpbd_max_sweeps: Option<u32>,
+    /// BDF2's local/global iterations per step (overrides the scene's).
+    pub bdf2_iterations: Option<u32>,
+    /// VBD's iterations per step (overrides the scene's).
+    pub vbd_iterations: Option<u32>,
+    /// VBD's Chebyshev ρ (overrides the scene's `vbd_chebyshev`).
+    pub vbd_chebyshev: Option<f64>,
     /// Solver threads (default: all cores).
     pub threads: Option<usize>,
     /// Time each pass of the step (the report's `pass_seconds`).
@@ -76,11 +88,23 @@ impl Overrides {
             ("--pd-iterations", self.pd_iterations),
             ("--xpbd-substeps", self.xpbd_substeps),
             ("--xpbd-iterations", self.xpbd_iterations),
+            ("--xpbd-max-sweeps", self.xpbd_max_sweeps),
+            ("--bdf2-iterations", self.bdf2_iterations),
+            ("--vbd-iterations", self.vbd_iterations),
         ];
         for (flag, n) in counts {
             if let Some(n) = n.filter(|&n| !sim::Iterations::allowed(n)) {
                 return Err(format!("{flag} {}, got {n}", sim::Iterations::RULE));
             }
+        }
+        if let Some(t) = self
+            .xpbd_tolerance
+            .filter(|t| !(t.is_finite() && *t >= 0.0))
+        {
+            return Err(format!("--xpbd-tolerance must be finite and >= 0, got {t}"));
+        }
+        if let Some(r) = self.vbd_chebyshev.filter(|r| !(0.0..1.0).contains(r)) {
+            return Err(format!("--vbd-chebyshev must be in [0, 1), got {r}"));
         }
         if let Some(t) = self.threads {
             check_threads(t)?;
@@ -234,6 +258,9 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
         if let Some(c) = overrides.spring_damping {
             p.spring_damping = c;
         }
+        if overrides.drag_in_solve {
+            p.drag_in_solve = true;
+        }
         p.stiffness_override = overrides.stiffness;
         if overrides.tear.is_some() {
             p.tear = overrides.tear;
@@ -244,10 +271,19 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
             (&mut it.projective, overrides.pd_iterations),
             (&mut it.xpbd_substeps, overrides.xpbd_substeps),
             (&mut it.xpbd_sweeps, overrides.xpbd_iterations),
+            (&mut it.xpbd_max_sweeps, overrides.xpbd_max_sweeps),
+            (&mut it.bdf2, overrides.bdf2_iterations),
+            (&mut it.vbd, overrides.vbd_iterations),
         ] {
             if let Some(v) = value {
                 *field = v;
             }
+        }
+        if let Some(t) = overrides.xpbd_tolerance {
+            it.xpbd_tolerance = t;
+        }
+        if let Some(r) = overrides.vbd_chebyshev {
+            it.vbd_chebyshev = r;
         }
     }
     let params = world.resource::<SimParams>().clone();

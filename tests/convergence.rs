@@ -81,6 +81,12 @@ fn dts(integrator: Integrator, omega: f64) -> Vec<f64> {
         // Ten substeps: the range of a ten times smaller step.
         Integrator::Xpbd if stiff => 1e-3,
         Integrator::Xpbd => 1e-2,
+        // Backward Euler's objective by vertex block descent: implicit Euler's range.
+        Integrator::Vbd if stiff => 1e-4,
+        Integrator::Vbd => 1e-3,
+        // Second order and dissipative: velocity Verlet's range.
+        Integrator::Bdf2 if stiff => 5e-3,
+        Integrator::Bdf2 => 1e-2,
     };
     (0..4).map(|i| start / f64::powi(2.0, i)).collect()
 }
@@ -91,8 +97,9 @@ fn expected_order(integrator: Integrator) -> f64 {
         | Integrator::SymplecticEuler
         | Integrator::ImplicitEuler
         | Integrator::ProjectiveDynamics
-        | Integrator::Xpbd => 1.0,
-        Integrator::VelocityVerlet => 2.0,
+        | Integrator::Xpbd
+        | Integrator::Vbd => 1.0,
+        Integrator::VelocityVerlet | Integrator::Bdf2 => 2.0,
         Integrator::Rk4 => 4.0,
     }
 }

@@ -147,6 +147,8 @@ fn static_drop(n: usize, k: f64) -> f64 {
 /// * projective dynamics at its default 10 iterations: 1e-9. It starts each step's iterations
 ///   from the previous shape, so a settled state is a fixed point of its descent: the
 ///   minimiser, whatever the iteration count.
+/// * BDF2 and VBD at their defaults (10 iterations; VBD also at 3): 1e-9, for the same
+///   reason (BDF2's history is the previous step's start: at rest, its target is the shape).
 /// * XPBD with 5 sweeps per substep (10 substeps): 1e-9.
 /// * XPBD at its default one sweep per substep is soft: the chain sags 2.5 % too far at 10
 ///   substeps, and the excess falls as 1/substeps² (0.025 % at 100). The test holds it to
@@ -164,6 +166,16 @@ fn both_settle_to_the_exact_static_sag_of_a_hanging_chain() {
         (
             Integrator::ProjectiveDynamics,
             Iterations::default(),
+            0.0..1e-9,
+        ),
+        (Integrator::Bdf2, Iterations::default(), 0.0..1e-9),
+        (Integrator::Vbd, Iterations::default(), 0.0..1e-9),
+        (
+            Integrator::Vbd,
+            Iterations {
+                vbd: 3,
+                ..Default::default()
+            },
             0.0..1e-9,
         ),
         (Integrator::Xpbd, counts(10, 5), 0.0..1e-9),
@@ -193,14 +205,11 @@ fn both_settle_to_the_exact_static_sag_of_a_hanging_chain() {
 /// its starting value (1e-9 relative for round-off) and ends clearly below it. (Step by step
 /// it is not monotone: backward Euler dissipates for a convex potential, and a compressed
 /// spring's is not; projective dynamics at 10 iterations measured a rise of 1e-7 relative in
-/// one step.)
+/// one step.) XPBD, BDF2 and VBD are held to the same on a 16 × 16 cloth, where one sweep
+/// does not converge (`tests/bdf2_vbd.rs`, `energy_at_h_omega_100_on_a_cloth`).
 #[test]
 fn stable_and_dissipative_at_h_omega_100() {
-    for integrator in [
-        Integrator::ProjectiveDynamics,
-        Integrator::Xpbd,
-        Integrator::ImplicitEuler,
-    ] {
+    for integrator in [Integrator::ProjectiveDynamics, Integrator::ImplicitEuler] {
         let mut scene = network(integrator, 1.0 / 60.0);
         scene.particles[2].vel = (3.0, -1.0); // start it moving
         // Stiffness for h·ω_max = 100 at dt = 1/60 (ω_max scales with sqrt(k)).
@@ -242,7 +251,12 @@ fn stable_and_dissipative_at_h_omega_100() {
 /// substeps' product of the same).
 #[test]
 fn the_stability_estimate_knows_the_new_methods_are_unconditional() {
-    for integrator in [Integrator::ProjectiveDynamics, Integrator::Xpbd] {
+    for integrator in [
+        Integrator::ProjectiveDynamics,
+        Integrator::Xpbd,
+        Integrator::Bdf2,
+        Integrator::Vbd,
+    ] {
         let app = app_with(network(integrator, 1.0 / 60.0));
         let params = app.world().resource::<SimParams>().clone();
         let e = stability::estimate(solver(&app), &params);
@@ -259,13 +273,22 @@ fn the_stability_estimate_knows_the_new_methods_are_unconditional() {
     assert!((kept(pd, 10.0) - 1.0 / 101f64.sqrt()).abs() < 1e-15);
     assert!((kept(xpbd, 10.0) - 1.0 / 32.0).abs() < 1e-15);
     assert!(kept(xpbd, 1.0) > kept(pd, 1.0));
+    // BDF2 keeps |ζ| of its characteristic equation's larger root: 0.3007 at hω = 10, three
+    // times backward Euler's; VBD converges to backward Euler.
+    assert!((kept(Integrator::Bdf2, 10.0) - 0.3007).abs() < 1e-3);
+    assert_eq!(kept(Integrator::Vbd, 10.0), kept(pd, 10.0));
 }
 
 /// An external force m·a moves the new methods exactly as a gravity of a does: they read it
 /// where they read gravity (the body forces), at every iteration and substep.
 #[test]
 fn external_forces_reach_the_new_methods() {
-    for integrator in [Integrator::ProjectiveDynamics, Integrator::Xpbd] {
+    for integrator in [
+        Integrator::ProjectiveDynamics,
+        Integrator::Xpbd,
+        Integrator::Bdf2,
+        Integrator::Vbd,
+    ] {
         let a = DVec2::new(2.0, -3.0);
         let mut with_gravity = network(integrator, 1.0 / 120.0);
         with_gravity.gravity = (a.x, a.y);

@@ -14,9 +14,9 @@ fn accurate_dt(integrator: Integrator) -> f64 {
     match integrator {
         // First order: the error is about h ω² t / 2 of the amplitude.
         Integrator::ExplicitEuler | Integrator::ImplicitEuler => 1e-5,
-        Integrator::ProjectiveDynamics => 1e-5,
+        Integrator::ProjectiveDynamics | Integrator::Vbd => 1e-5,
         Integrator::SymplecticEuler | Integrator::Xpbd => 1e-4,
-        Integrator::VelocityVerlet | Integrator::Rk4 => 1e-3,
+        Integrator::VelocityVerlet | Integrator::Rk4 | Integrator::Bdf2 => 1e-3,
     }
 }
 

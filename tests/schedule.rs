@@ -102,11 +102,9 @@ fn the_fused_sweep_equals_the_separate_passes_bit_for_bit() {
                 assert!(fused == separate, "{what}: the fused sweep differs");
                 assert_eq!(counts.sweeps, 30, "{what}");
                 assert_eq!(separate_counts.sweeps, 0, "{what}");
-                assert_eq!(
-                    counts.damping,
-                    if damping != 0.0 { 30 } else { 0 },
-                    "{what}"
-                );
+                // BDF2 takes the damping inside its solve: no damping pass.
+                let damped = damping != 0.0 && !integrator.drags_in_solve();
+                assert_eq!(counts.damping, if damped { 30 } else { 0 }, "{what}");
                 assert_eq!(
                     counts.ground,
                     if ground.is_some() { 30 } else { 0 },

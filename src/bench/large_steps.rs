@@ -32,6 +32,8 @@ pub struct Method {
     pub integrator: Integrator,
     /// Its iteration counts.
     pub iterations: Iterations,
+    /// The damping μ inside the solve (projective dynamics, VBD; BDF2 always).
+    pub drag_in_solve: bool,
 }
 
 /// The methods compared: every integrator at its defaults, and the iterative ones also worked
@@ -45,12 +47,14 @@ pub fn methods() -> Vec<Method> {
             label: integrator.cli_name().to_string(),
             integrator,
             iterations: d,
+            drag_in_solve: false,
         })
         .collect();
     out.push(Method {
         label: "implicit-euler ×10 Newton".into(),
         integrator: Integrator::ImplicitEuler,
         iterations: Iterations { newton: 10, ..d },
+        drag_in_solve: false,
     });
     out.push(Method {
         label: "projective-dynamics ×50".into(),
@@ -59,6 +63,13 @@ pub fn methods() -> Vec<Method> {
             projective: 50,
             ..d
         },
+        drag_in_solve: false,
+    });
+    out.push(Method {
+        label: "projective-dynamics μ in solve".into(),
+        integrator: Integrator::ProjectiveDynamics,
+        iterations: d,
+        drag_in_solve: true,
     });
     out.push(Method {
         label: "xpbd 10×5".into(),
@@ -67,6 +78,28 @@ pub fn methods() -> Vec<Method> {
             xpbd_sweeps: 5,
             ..d
         },
+        drag_in_solve: false,
+    });
+    out.push(Method {
+        label: "xpbd tol 1e-3".into(),
+        integrator: Integrator::Xpbd,
+        iterations: Iterations {
+            xpbd_tolerance: 1e-3,
+            ..d
+        },
+        drag_in_solve: false,
+    });
+    out.push(Method {
+        label: "vbd ×3".into(),
+        integrator: Integrator::Vbd,
+        iterations: Iterations { vbd: 3, ..d },
+        drag_in_solve: false,
+    });
+    out.push(Method {
+        label: "vbd ×50".into(),
+        integrator: Integrator::Vbd,
+        iterations: Iterations { vbd: 50, ..d },
+        drag_in_solve: false,
     });
     out
 }
@@ -77,6 +110,13 @@ pub struct Problem {
     pub name: &'static str,
     scene: Scene,
     reference_dt: f64,
+}
+
+impl Problem {
+    /// The scene (no ground, released from rest).
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
 }
 
 fn scene(path: &str) -> Result<Scene, String> {
@@ -170,6 +210,20 @@ pub struct TargetRow {
     pub error: f64,
 }
 
+/// The cost of the first step after a cut of the 256² cloth.
+#[derive(Debug, Clone)]
+pub struct CutRow {
+    /// The method's label.
+    pub method: String,
+    /// A usual step (the median of 5), s.
+    pub usual_s: f64,
+    /// The first step after the cut, s.
+    pub after_cut_s: f64,
+    /// Of it, the method's own precomputation redone (factorisations, colouring; XPBD's
+    /// colouring is not timed), s.
+    pub precompute_s: f64,
+}
+
 /// The study's results.
 pub struct Report {
     /// Every run.
@@ -178,6 +232,8 @@ pub struct Report {
     pub sags: Vec<Sag>,
     /// The target runs (64² and 256² at dt = 1/60 s).
     pub targets: Vec<TargetRow>,
+    /// The first step after a cut of the 256² cloth, per large-step method.
+    pub cuts: Vec<CutRow>,
     /// How each reference was obtained and how converged it is.
     pub notes: Vec<String>,
 }
@@ -186,6 +242,7 @@ fn with(scene: &Scene, m: &Method, dt: f64) -> Scene {
     Scene {
         integrator: m.integrator,
         iterations: m.iterations,
+        drag_in_solve: m.drag_in_solve,
         dt,
         ..scene.clone()
     }
@@ -198,6 +255,7 @@ pub fn run(problems: &[Problem], mut progress: impl FnMut(&str)) -> Result<Repor
         label: "rk4".into(),
         integrator: Integrator::Rk4,
         iterations: Iterations::default(),
+        drag_in_solve: false,
     };
     for p in problems {
         let dt = p.reference_dt;
@@ -224,10 +282,12 @@ pub fn run(problems: &[Problem], mut progress: impl FnMut(&str)) -> Result<Repor
         sags.extend(static_sags(p, &mut progress)?);
     }
     let targets = target_runs(&mut notes, &mut progress)?;
+    let cuts = cut_costs(&mut progress)?;
     Ok(Report {
         rows,
         sags,
         targets,
+        cuts,
         notes,
     })
 }
@@ -246,6 +306,7 @@ fn target_runs(
         label: "rk4".into(),
         integrator: Integrator::Rk4,
         iterations: d,
+        drag_in_solve: false,
     };
     for (name, path) in [
         ("cloth64", "assets/scenes/bench/cloth64.ron"),
@@ -261,12 +322,15 @@ fn target_runs(
             Integrator::Xpbd,
             Integrator::ProjectiveDynamics,
             Integrator::ImplicitEuler,
+            Integrator::Bdf2,
+            Integrator::Vbd,
         ]
         .into_iter()
         .map(|integrator| Method {
             label: integrator.cli_name().into(),
             integrator,
             iterations: d,
+            drag_in_solve: false,
         })
         .collect();
         // The methods in alternating rounds, so that a slow spell of the machine falls on all.
@@ -282,7 +346,9 @@ fn target_runs(
             }
         }
         for (m, rounds) in methods.into_iter().zip(runs) {
-            let setup = |t: &Trajectory| t.stats.factorization_seconds;
+            // The one-time setup: the factorisations (BDF2's two, and projective dynamics').
+            let setup =
+                |t: &Trajectory| t.stats.factorization_seconds + t.stats.bdf2_factorization_seconds;
             let step = |t: &Trajectory| (t.wall_s - setup(t)) / t.steps.max(1) as f64;
             out.push(TargetRow {
                 scene: name.into(),
@@ -298,6 +364,100 @@ fn target_runs(
 
 /// Rounds of the targets' runs.
 const TARGET_ROUNDS: usize = 3;
+
+/// The large-step methods on the 256² cloth at dt = 1/60 s: 5 steps, then 5 timed one by one
+/// (the usual step, their median), then a cut across the cloth's middle (the springs whose
+/// ends lie on both sides of its middle row, over its middle half) and the one step after it,
+/// timed: what a change of the spring graph costs each (a refactorisation for projective
+/// dynamics and BDF2, a recolouring for XPBD and VBD).
+fn cut_costs(progress: &mut impl FnMut(&str)) -> Result<Vec<CutRow>, String> {
+    use crate::sim::{Position, Spring};
+    let cloth = scene("assets/scenes/bench/cloth256.ron")?;
+    let d = Iterations::default();
+    let mut out = vec![];
+    for integrator in [
+        Integrator::ProjectiveDynamics,
+        Integrator::Bdf2,
+        Integrator::Vbd,
+        Integrator::Xpbd,
+        Integrator::ImplicitEuler,
+    ] {
+        progress(&format!("cut: cloth256 {integrator}"));
+        let m = Method {
+            label: integrator.cli_name().into(),
+            integrator,
+            iterations: d,
+            drag_in_solve: false,
+        };
+        let loaded = LoadedScene::from_scene(with(&cloth, &m, 1.0 / 60.0), None)
+            .map_err(|e| e.to_string())?;
+        let mut app = crate::running_app(&loaded)?;
+        let world = app.world_mut();
+        sim::advance(world, 5);
+        let mut usual = vec![];
+        for _ in 0..5 {
+            let t = std::time::Instant::now();
+            sim::advance(world, 1);
+            usual.push(t.elapsed().as_secs_f64());
+        }
+        // The cut: springs across the middle height, over the middle half of the width.
+        let ys: Vec<f64> = world
+            .query::<&Position>()
+            .iter(world)
+            .map(|p| p.0.y)
+            .collect();
+        let (lo, hi) = ys
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &y| {
+                (l.min(y), h.max(y))
+            });
+        let xs: Vec<f64> = world
+            .query::<&Position>()
+            .iter(world)
+            .map(|p| p.0.x)
+            .collect();
+        let (left, right) = xs
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| {
+                (l.min(x), h.max(x))
+            });
+        let (mid, quarter) = ((lo + hi) / 2.0, (right - left) / 4.0);
+        let centre = (left + right) / 2.0;
+        let mut cut = vec![];
+        for (e, s) in world
+            .query::<(bevy::prelude::Entity, &Spring)>()
+            .iter(world)
+        {
+            let (Some(a), Some(b)) = (world.get::<Position>(s.a), world.get::<Position>(s.b))
+            else {
+                continue;
+            };
+            let crosses = (a.0.y - mid) * (b.0.y - mid) < 0.0;
+            let inside = ((a.0.x + b.0.x) / 2.0 - centre).abs() < quarter;
+            if crosses && inside {
+                cut.push(e);
+            }
+        }
+        for e in cut {
+            world.despawn(e);
+        }
+        let precomputed = |world: &bevy::prelude::World| {
+            let st = world.resource::<sim::Solver>().solve_stats();
+            st.factorization_seconds + st.bdf2_factorization_seconds + st.vbd_colouring_seconds
+        };
+        let before = precomputed(world);
+        let t = std::time::Instant::now();
+        sim::advance(world, 1);
+        let after_cut_s = t.elapsed().as_secs_f64();
+        out.push(CutRow {
+            method: m.label,
+            usual_s: median(usual),
+            after_cut_s,
+            precompute_s: precomputed(world) - before,
+        });
+    }
+    Ok(out)
+}
 
 /// Each method settled for 10 s at dt = 1/60 s, against the equilibrium found by minimising
 /// the potential from the best settled shape.
@@ -462,6 +622,28 @@ pub fn markdown(report: &Report, machine: &str, command: &str) -> String {
     }
     let _ = writeln!(
         s,
+        "\n## The first step after a cut of the 256² cloth\n\nAt dt = 1/60 s: a usual step \
+         (the median of 5, ECS sync included), and the one step after a cut across the \
+         cloth's middle (about 400 springs despawned), which redoes what the method \
+         precomputes from the spring graph (timed apart: projective dynamics' and BDF2's \
+         factorisations, VBD's colouring; XPBD's colouring is not timed), besides the ECS \
+         layer's repacking of the state, which every method pays (implicit Euler precomputes \
+         nothing).\n\n| method | usual step | first step after the cut | ratio | of it, the \
+         method's precomputation |\n| --- | ---: | ---: | ---: | ---: |"
+    );
+    for c in &report.cuts {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {:.2} | {} |",
+            c.method,
+            fmt_time(c.usual_s),
+            fmt_time(c.after_cut_s),
+            c.after_cut_s / c.usual_s,
+            fmt_time(c.precompute_s)
+        );
+    }
+    let _ = writeln!(
+        s,
         "\n## Static sag\n\nEach method settled for 10 s at dt = 1/60 s, against the true \
          equilibrium (the potential minimised directly by Newton's method with a line search). \
          A cell reads the largest distance (m) of a particle from it, and that as a fraction of \
@@ -508,6 +690,14 @@ fn iteration_summary(rows: &[&LargeRow]) -> String {
             )
         } else if let Some(sw) = st.xpbd_sweeps_per_step {
             format!("{sw:.0} sweeps over {} colours", st.xpbd_colours)
+        } else if let Some(it) = st.bdf2_iterations_per_step {
+            format!(
+                "{it:.0} local/global, {} factorisation(s) in {}",
+                st.bdf2_factorizations,
+                fmt_time(st.bdf2_factorization_seconds)
+            )
+        } else if let Some(it) = st.vbd_iterations_per_step {
+            format!("{it:.0} iterations over {} colours", st.vbd_colours)
         } else {
             continue;
         };

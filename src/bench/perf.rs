@@ -65,6 +65,8 @@ fn cost(i: Integrator) -> f64 {
         Integrator::ImplicitEuler => 6.0,
         Integrator::ProjectiveDynamics => 4.0,
         Integrator::Xpbd => 10.0,
+        Integrator::Bdf2 => 4.0,
+        Integrator::Vbd => 12.0,
     }
 }
 

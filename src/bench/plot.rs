@@ -25,6 +25,8 @@ fn colour(i: Integrator) -> RGBColor {
         Integrator::ImplicitEuler => RGBColor(255, 127, 14),
         Integrator::ProjectiveDynamics => RGBColor(23, 190, 207),
         Integrator::Xpbd => RGBColor(140, 86, 75),
+        Integrator::Bdf2 => RGBColor(227, 119, 194),
+        Integrator::Vbd => RGBColor(188, 189, 34),
     }
 }
 

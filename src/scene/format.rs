@@ -17,6 +17,10 @@ pub struct Scene {
     /// The dashpot c (N·s/m) of every spring without a `damping` of its own; default 0 (off).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub spring_damping: f64,
+    /// Projective dynamics and VBD take `damping` inside their solve as the force −μ m v
+    /// (BDF2 always does); default false: exp(−μ dt) after the step.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub drag_in_solve: bool,
     /// Height of the ground; `None` = no ground.
     pub ground: Option<f64>,
     /// The time integrator.
@@ -96,6 +100,10 @@ pub struct Plasticity {
 
 fn is_zero(v: &f64) -> bool {
     *v == 0.0
+}
+
+fn is_false(v: &bool) -> bool {
+    !*v
 }
 
 /// An obstacle as written in a scene: a shape where it stands (it does not move unless a
@@ -406,6 +414,7 @@ impl Default for Scene {
             gravity: (p.gravity.x, p.gravity.y),
             damping: p.damping,
             spring_damping: p.spring_damping,
+            drag_in_solve: p.drag_in_solve,
             ground: p.ground,
             integrator: p.integrator,
             dt: p.dt,

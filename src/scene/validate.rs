@@ -44,6 +44,9 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
         let (name, rule) = (Iterations::NAMES[field], Iterations::RULE);
         p.push(format!("iterations.{name}: {rule}, got {v}"));
     }
+    if let Some((name, v, rule)) = scene.iterations.bad_real() {
+        p.push(format!("iterations.{name}: {rule}, got {v}"));
+    }
     if let Some(c) = &scene.contact
         && let Some((field, v, rule)) = c.problem()
     {

@@ -70,6 +70,13 @@ pub fn check_params(p: &SimParams) -> Option<InputProblem> {
         let field = super::params::ITERATION_FIELDS[field];
         return Some(problem(field, v as f64, Iterations::RULE));
     }
+    if let Some((name, v, rule)) = p.iterations.bad_real() {
+        let field = match name {
+            "xpbd_tolerance" => "SimParams.iterations.xpbd_tolerance",
+            _ => "SimParams.iterations.vbd_chebyshev",
+        };
+        return Some(problem(field, v, rule));
+    }
     if let Some((field, v, rule)) = p.contact.as_ref().and_then(|c| c.problem()) {
         let field = match field {
             "radius" => "SimParams.contact.radius",

@@ -49,11 +49,14 @@ impl CgSettings {
 
 /// The paths of [`Iterations`]' fields in [`SimParams`] (for [`InputProblem::field`]), in the
 /// order of [`Iterations::NAMES`].
-pub const ITERATION_FIELDS: [&str; 4] = [
+pub const ITERATION_FIELDS: [&str; 7] = [
     "SimParams.iterations.newton",
     "SimParams.iterations.projective",
     "SimParams.iterations.xpbd_substeps",
     "SimParams.iterations.xpbd_sweeps",
+    "SimParams.iterations.bdf2",
+    "SimParams.iterations.vbd",
+    "SimParams.iterations.xpbd_max_sweeps",
 ];
 
 /// What the simulation does each step. Defaults are the assignment's.
@@ -78,6 +81,10 @@ pub struct SimParams {
     /// The dashpot c (N·s/m) of every spring without a [`crate::sim::Dashpot`] of its own
     /// (the panel's slider and `--spring-damping`). 0 = off, and no dashpot pass runs.
     pub spring_damping: f64,
+    /// Projective dynamics and VBD take the damping μ inside their solve, as the force
+    /// −μ m v, instead of multiplying by exp(−μ dt) after the step (BDF2 always does): at
+    /// large steps the splitting is a first-order error of its own. Off by default.
+    pub drag_in_solve: bool,
     /// Height of the ground; `None` = no ground.
     pub ground: Option<f64>,
     /// The time integrator.
@@ -92,7 +99,8 @@ pub struct SimParams {
     /// Tearing: a spring stretched past (1 + strain) × its rest length breaks (is despawned) at
     /// the end of the tick. `None` = springs never break, and the tear pass does not run.
     pub tear: Option<f64>,
-    /// Iteration counts of implicit Euler, projective dynamics and XPBD.
+    /// Iteration counts of implicit Euler, projective dynamics, XPBD, BDF2 and VBD, XPBD's
+    /// tolerance and VBD's Chebyshev ρ.
     pub iterations: Iterations,
     /// Contact: the particles' radius and the friction and restitution of every contact (the
     /// ground's and the obstacles'). `None`: particles are points, the ground clamps with no
@@ -106,6 +114,7 @@ impl Default for SimParams {
             gravity: DVec2::new(0.0, -9.8),
             damping: 10.0,
             spring_damping: 0.0,
+            drag_in_solve: false,
             ground: Some(0.0),
             integrator: Integrator::SymplecticEuler,
             dt: 1e-4,
@@ -282,5 +291,16 @@ impl Default for TickPlan {
             steps_per_tick: 1,
             target_tick_seconds: 1.0 / 120.0,
         }
+    }
+}
+
+impl SimParams {
+    /// The μ the integrator takes inside its solve: the damping when it takes the drag there
+    /// (BDF2 always, projective dynamics and VBD with [`Self::drag_in_solve`]), else 0 (the
+    /// damping pass applies it).
+    pub fn solve_drag(&self) -> f64 {
+        let inside = self.integrator.drags_in_solve()
+            || (self.drag_in_solve && self.integrator.can_drag_in_solve());
+        if inside { self.damping } else { 0.0 }
     }
 }

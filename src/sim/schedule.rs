@@ -395,9 +395,20 @@ pub fn sweep_fused(sweep: Res<ParticleSweep>) -> bool {
     sweep.fused
 }
 
-/// Run condition: damping is on (μ ≠ 0).
+/// Run condition: damping is on (μ ≠ 0) and the damping pass applies it (BDF2 takes it
+/// inside its solve).
 pub fn damping_enabled(params: Res<SimParams>) -> bool {
-    params.damping != 0.0
+    pass_damping(&params) != 0.0
+}
+
+/// The μ the damping pass (or the fused sweep) applies: 0 for the methods that take the drag
+/// inside their solve ([`Integrator::drags_in_solve`]).
+pub fn pass_damping(params: &SimParams) -> f64 {
+    if params.solve_drag() != 0.0 {
+        0.0
+    } else {
+        params.damping
+    }
 }
 
 /// Run condition: the scene has a ground that the ground pass clamps (with contact set, the
@@ -492,6 +503,7 @@ fn integrate(
             .contact
             .filter(|c| c.particles && c.radius > 0.0)
             .map(|c| c.radius),
+        drag: params.solve_drag(),
     };
     let s = &mut *solver;
     if !method.integrator.reads_spring_forces() {
@@ -556,7 +568,7 @@ fn particle_sweep(
         // The contact pass needs the velocity the step moves with (the separate kick keeps it).
         step::keep_start_velocity(&mut solver.state);
     }
-    let (mu, ground) = (params.damping, clamped_ground(&params));
+    let (mu, ground) = (pass_damping(&params), clamped_ground(&params));
     let sweep = step::sweep(&mut solver.state, integrator, dt, mu, ground, &threads);
     n.integrate += sweep.motion.kicks() as u64;
     n.damping += sweep.decay.is_some() as u64;

@@ -169,6 +169,9 @@ pub fn sync_into_solver(
         if vel.is_changed() {
             solver.v[i] = if pinned { DVec2::ZERO } else { vel.0 };
         }
+        if (pos.is_changed() || vel.is_changed()) && !(pinned || held) {
+            solver.edited();
+        }
         // Grabbing and releasing (Kinematic) changes the inverse mass without a repack.
         let w = inverse_mass(mass.0, pinned || held);
         if mass.is_changed() || solver.inv_mass[i].to_bits() != w.to_bits() {
@@ -361,6 +364,7 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &Springs) {
         external,
         kinematic,
         drift: vec![],
+        edits: 0,
         x,
         v,
         mass,
@@ -468,6 +472,7 @@ pub fn sync_from_solver(
             }
         }
         solver.non_finite = false;
+        solver.edited();
         return;
     }
     for (index, mut pos, mut vel, mut force) in &mut particles {

@@ -20,6 +20,7 @@
 //!   XPBD's colouring. They hold invariants (array lengths, index order, thread-part
 //!   boundaries) that only the packing maintains.
 
+pub(crate) mod bdf2;
 pub(crate) mod cholesky;
 pub mod contact;
 pub(crate) mod crew;
@@ -42,6 +43,7 @@ pub(crate) mod stiffness;
 pub(crate) mod supernode;
 pub(crate) mod sweep;
 pub(crate) mod team;
+pub(crate) mod vbd;
 pub(crate) mod wide;
 pub(crate) mod xpbd;
 

@@ -80,8 +80,38 @@ struct Structure {
 struct Key {
     /// the state's revision: the spring graph, stiffnesses, masses and pins.
     revision: u64,
-    /// The time step's bits.
-    dt: u64,
+    /// The solve's step ĥ, and the mass scale 1 + ĥμ, as bits.
+    h: u64,
+    scale: u64,
+}
+
+/// The variational problem of one implicit step, in the form every method of the backward
+/// differentiation family shares: minimise over the end positions x
+///
+/// Φ(x) = s/(2ĥ²) ‖x − y‖²_M + E(x) + D(x),  y = x̂ + (ĥ/s)(v̂ + ĥ M⁻¹ f_body),  s = 1 + ĥμ,
+///
+/// whose stationarity is M(v − v̂) = ĥ (f(x) − μ M v) with v = (x − x̂)/ĥ. Backward Euler is
+/// ĥ = h, x̂ = x₀, v̂ = v₀; BDF2 is ĥ = 2h/3, x̂ = (4x₀ − x₋₁)/3, v̂ = (4v₀ − v₋₁)/3
+/// ([`super::bdf2`]). The air drag μ enters as the force −μMv (the mass scale s) when the
+/// method takes it inside the solve, and is 0 here when the damping pass applies it after the
+/// step. D is the dashpots' dissipation, c/(2ĥ) (n·(Δx_a − Δx_b))² with Δx = x − x̂.
+#[derive(Debug, Clone, Copy)]
+pub struct Target<'a> {
+    /// ĥ, s.
+    pub h: f64,
+    /// μ inside the solve, 1/s (0: the damping pass applies it).
+    pub drag: f64,
+    /// x̂, every particle (only the free ones are read).
+    pub base: &'a [DVec2],
+    /// v̂, every particle (only the free ones are read).
+    pub velocity: &'a [DVec2],
+}
+
+impl Target<'_> {
+    /// s = 1 + ĥμ.
+    pub fn scale(&self) -> f64 {
+        1.0 + self.h * self.drag
+    }
 }
 
 /// The factored global matrix and the buffers of the iterations, kept from step to step.
@@ -161,17 +191,19 @@ impl PairPass for LocalStep<'_> {
 }
 
 impl Projective {
-    /// Builds and factors M + h² L over the free particles when the key changed.
-    fn prepare(&mut self, s: &State, dt: f64, threads: &Threads) -> Result<(), String> {
+    /// Builds and factors s M + ĥ² L over the free particles when the key changed.
+    fn prepare(&mut self, s: &State, t: &Target, threads: &Threads) -> Result<(), String> {
+        let (dt, scale) = (t.h, t.scale());
         let key = Key {
             revision: s.revision,
-            dt: dt.to_bits(),
+            h: dt.to_bits(),
+            scale: scale.to_bits(),
         };
         if self.key == Some(key) {
             return Ok(());
         }
         let start = Instant::now();
-        let n = s.x.len();
+        let n = s.mass.len();
         self.row.clear();
         self.particle.clear();
         for (i, &w) in s.inv_mass.iter().enumerate() {
@@ -183,7 +215,9 @@ impl Projective {
             }
         }
         let rows = self.particle.len();
-        let mut diagonal: Vec<f64> = self.particle.iter().map(|&i| s.mass[i as usize]).collect();
+        let mut diagonal: Vec<f64> = (self.particle.iter())
+            .map(|&i| s.mass[i as usize] * scale)
+            .collect();
         let mut entries = Vec::with_capacity(rows + s.springs.len());
         for (spring, sp) in s.springs.iter().enumerate() {
             let (ra, rb) = (self.row[sp.a as usize], self.row[sp.b as usize]);
@@ -222,7 +256,7 @@ impl Projective {
         }
         let pattern = matrix.symbolic();
         if !kept {
-            let (symbolic, order) = self.symbolic(s, &matrix)?;
+            let (symbolic, order) = self.symbolic(t.base, &matrix)?;
             self.structure = Some(Structure {
                 col_ptr: pattern.col_ptr().to_vec(),
                 row_idx: pattern.row_idx().to_vec(),
@@ -260,12 +294,12 @@ impl Projective {
         let lowest = self
             .particle
             .iter()
-            .map(|&i| s.mass[i as usize])
+            .map(|&i| s.mass[i as usize] * scale)
             .fold(f64::INFINITY, f64::min);
         let highest = diagonal
             .iter()
             .zip(&self.particle)
-            .map(|(&d, &i)| 2.0 * d - s.mass[i as usize])
+            .map(|(&d, &i)| 2.0 * d - s.mass[i as usize] * scale)
             .fold(0.0, f64::max);
         self.factor.finish(
             highest / lowest <= MAX_CONDITION_FOR_F32,
@@ -300,7 +334,7 @@ impl Projective {
     /// [`DISSECTION_MIN_ROWS`] rows or more.
     fn symbolic(
         &self,
-        s: &State,
+        x: &[DVec2],
         matrix: &SparseColMat<usize, f64>,
     ) -> Result<(SymbolicCholesky<usize>, FactorOrder), String> {
         let factorize = |ordering| {
@@ -328,7 +362,7 @@ impl Projective {
                     .map(move |&r| (r, col))
             }),
         );
-        let position: Vec<DVec2> = self.particle.iter().map(|&i| s.x[i as usize]).collect();
+        let position: Vec<DVec2> = self.particle.iter().map(|&i| x[i as usize]).collect();
         let perm = permutation(
             nested_dissection(&position, &start, &neighbours)
                 .into_iter()
@@ -467,44 +501,89 @@ fn parallelism(threads: &Threads, springs: usize) -> Par {
 
 /// One projective dynamics step of `iterations` local/global iterations: sets v to
 /// (x1 − x0)/h for the free particles (see the module docs). `s.f` holds the body forces.
+/// `drag` is μ when the air drag enters the solve ([`Target`]), 0 when the damping pass
+/// applies it after the step.
 pub fn step(
     s: &mut State,
     pd: &mut Projective,
     dt: f64,
+    drag: f64,
     iterations: u32,
     threads: &Threads,
 ) -> Result<(), String> {
-    pd.prepare(s, dt, threads)?;
-    pd.run(s, dt, iterations, threads);
+    let target = Target {
+        h: dt,
+        drag,
+        base: &s.x,
+        velocity: &s.v,
+    };
+    pd.solve(s, &target, dt, iterations, threads)?;
+    let inv_h = 1.0 / dt;
+    let data = (&mut s.v[..], &pd.z[..], &s.x[..], &s.inv_mass[..]);
+    threads.each(s.springs.len(), data, |(v, z, x, w)| {
+        for i in 0..v.len() {
+            if w[i] != 0.0 {
+                v[i] = (z[i] - x[i]) * inv_h;
+            }
+        }
+    });
     Ok(())
 }
 
 impl Projective {
-    fn run(&mut self, s: &mut State, dt: f64, iterations: u32, threads: &Threads) {
-        let h2 = dt * dt;
+    /// The end positions of one implicit step ([`Target`]) by `iterations` local/global
+    /// iterations, left in [`Self::end`]: every particle's, the eliminated ones (inverse mass
+    /// 0) at x₀ + dt v₀ (the target's base and velocity are x₀ and v₀ for them). `s.f`
+    /// holds the body forces.
+    pub fn solve(
+        &mut self,
+        s: &State,
+        t: &Target,
+        dt: f64,
+        iterations: u32,
+        threads: &Threads,
+    ) -> Result<(), String> {
+        self.prepare(s, t, threads)?;
+        self.run(s, t, dt, iterations, threads);
+        Ok(())
+    }
+
+    /// The end positions of the last [`Self::solve`].
+    pub fn end(&self) -> &[DVec2] {
+        &self.z
+    }
+
+    fn run(&mut self, s: &State, t: &Target, dt: f64, iterations: u32, threads: &Threads) {
+        let (h, scale) = (t.h, t.scale());
+        let h2 = h * h;
         let springs = s.springs.len();
-        // z = x0 + h v0 (eliminated particles' final positions); M y = m (z + h² f/m).
+        // z = x̂ + (ĥ/s) v̂ for the free particles, x0 + dt v0 for the eliminated ones (their
+        // final positions); s M y = s m x̂ + ĥ m v̂ + ĥ² f.
+        let h_over_s = h / scale;
         let data = (
             &mut self.z[..],
             &mut self.my[..],
-            &s.x[..],
-            &s.v[..],
+            (t.base, t.velocity),
             &s.f[..],
-            &s.mass[..],
+            (&s.mass[..], &s.inv_mass[..]),
         );
-        threads.each(springs, data, |(z, my, x, v, f, m)| {
+        threads.each(springs, data, |(z, my, (x, v), f, (m, w))| {
             for i in 0..z.len() {
-                z[i] = x[i] + v[i] * dt;
-                my[i] = z[i] * m[i] + f[i] * h2;
+                z[i] = if w[i] != 0.0 {
+                    x[i] + v[i] * h_over_s
+                } else {
+                    x[i] + v[i] * dt
+                };
+                my[i] = (x[i] * scale + v[i] * h) * m[i] + f[i] * h2;
             }
         });
         for _ in 0..iterations {
-            // r = M y − (M + h² L) z: M (y − z), and each spring's h² k (d − (z_a − z_b)).
+            // r = s M y − (s M + ĥ² L) z: s M (y − z), and each spring's ĥ² k (d − (z_a − z_b)).
             let local = LocalStep { z: &self.z, h2 };
             let (my, z, m) = (&self.my[..], &self.z[..], &s.mass[..]);
             let start = |lo: usize, r: &mut [DVec2]| {
                 for (i, r) in (lo..).zip(r) {
-                    *r = my[i] - z[i] * m[i];
+                    *r = my[i] - z[i] * (m[i] * scale);
                 }
             };
             scatter_from(
@@ -517,7 +596,7 @@ impl Projective {
             );
             if s.materials.exerts_forces() {
                 s.materials
-                    .add_projective_terms(&s.springs, &s.x, &self.z, dt, &mut self.r);
+                    .add_projective_terms(&s.springs, t.base, &self.z, h, &mut self.r);
             }
             let global = GlobalStep {
                 factor: &self.factor,
@@ -533,15 +612,6 @@ impl Projective {
                 Global::Double(rhs) => global.correct(rhs),
             }
         }
-        let inv_h = 1.0 / dt;
-        let data = (&mut s.v[..], &self.z[..], &s.x[..], &s.inv_mass[..]);
-        threads.each(springs, data, |(v, z, x, w)| {
-            for i in 0..v.len() {
-                if w[i] != 0.0 {
-                    v[i] = (z[i] - x[i]) * inv_h;
-                }
-            }
-        });
         self.iterations += iterations as u64;
         self.steps += 1;
     }
@@ -728,7 +798,7 @@ mod tests {
                 fill_order: order,
                 ..Default::default()
             };
-            step(&mut s, &mut pd, dt, 300, &threads).unwrap();
+            step(&mut s, &mut pd, dt, 0.0, 300, &threads).unwrap();
             let chosen = pd.factor_order().unwrap();
             assert_eq!(chosen, order.unwrap_or(FactorOrder::NestedDissection));
             ends.push((s.v.clone(), pd.factor_supernodes()));
@@ -753,7 +823,7 @@ mod tests {
         let dt = 1.0 / 60.0;
         let mut s = cloth(36);
         let mut pd = Projective::default();
-        step(&mut s, &mut pd, dt, 10, &threads).unwrap();
+        step(&mut s, &mut pd, dt, 0.0, 10, &threads).unwrap();
         let tear = |s: &mut State, every: usize| {
             let mut k = 0;
             s.springs.retain(|_| {
@@ -766,14 +836,14 @@ mod tests {
         // Two iterations: the correction form converges to the same step with any factor near
         // the matrix's, so it is after a few that a factor of another matrix would show.
         let mut fresh_state = copy(&s);
-        step(&mut s, &mut pd, dt, 2, &threads).unwrap();
+        step(&mut s, &mut pd, dt, 0.0, 2, &threads).unwrap();
         assert_eq!((pd.factorizations, pd.symbolic_factorizations), (2, 1));
         let mut fresh = Projective::default();
-        step(&mut fresh_state, &mut fresh, dt, 2, &threads).unwrap();
+        step(&mut fresh_state, &mut fresh, dt, 0.0, 2, &threads).unwrap();
         let worst = end_gap(&s.v, &fresh_state.v, dt);
         assert!(worst < 1e-9, "the end positions differ by {worst:e}");
         tear(&mut s, 2);
-        step(&mut s, &mut pd, dt, 10, &threads).unwrap();
+        step(&mut s, &mut pd, dt, 0.0, 10, &threads).unwrap();
         assert_eq!((pd.factorizations, pd.symbolic_factorizations), (3, 2));
     }
 
@@ -785,21 +855,21 @@ mod tests {
         let dt = 1.0 / 60.0;
         let mut s = cloth(36);
         let mut pd = Projective::default();
-        step(&mut s, &mut pd, dt, 10, &threads).unwrap();
+        step(&mut s, &mut pd, dt, 0.0, 10, &threads).unwrap();
         assert_eq!((pd.factorizations, pd.symbolic_factorizations), (1, 1));
         for sp in &mut s.springs {
             sp.k *= 3.0;
         }
         s.touch();
         let mut fresh_state = copy(&s);
-        step(&mut s, &mut pd, dt, 300, &threads).unwrap();
+        step(&mut s, &mut pd, dt, 0.0, 300, &threads).unwrap();
         assert_eq!((pd.factorizations, pd.symbolic_factorizations), (2, 1));
         let mut fresh = Projective::default();
-        step(&mut fresh_state, &mut fresh, dt, 300, &threads).unwrap();
+        step(&mut fresh_state, &mut fresh, dt, 0.0, 300, &threads).unwrap();
         assert_same_end(&s.v, &fresh_state.v, dt);
         s.inv_mass[700] = 0.0;
         s.touch();
-        step(&mut s, &mut pd, dt, 10, &threads).unwrap();
+        step(&mut s, &mut pd, dt, 0.0, 10, &threads).unwrap();
         assert_eq!((pd.factorizations, pd.symbolic_factorizations), (3, 2));
     }
 }

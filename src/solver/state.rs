@@ -55,6 +55,9 @@ pub struct State {
     /// methods that precompute from these (projective dynamics' factor, XPBD's colouring)
     /// redo it.
     pub(crate) revision: u64,
+    /// Bumped whenever a free particle's position or velocity is set from outside the step
+    /// (a drag, an undo, a restored state): the multistep method (BDF2) restarts its history.
+    pub(crate) edits: u64,
     /// Dashpots, gas bodies, muscles and plastic springs ([`Materials`]); empty lists when the
     /// scene has none.
     pub(crate) materials: Materials,
@@ -110,6 +113,10 @@ impl State {
     /// Marks the spring graph, a stiffness, a mass or a pin as changed.
     pub(crate) fn touch(&mut self) {
         self.revision = self.revision.wrapping_add(1);
+    }
+    /// Marks a free particle's position or velocity as set from outside the step.
+    pub(crate) fn edited(&mut self) {
+        self.edits = self.edits.wrapping_add(1);
     }
 }
 

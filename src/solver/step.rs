@@ -22,10 +22,13 @@
 //!    | implicit Euler | 1 + CG | (M − dt² K) Δv = dt (f0 + dt K v0), Newton steps after | v1 |
 //!    | projective dynamics | body forces | (x1 − x0)/dt, x1 by local/global iterations | v1 |
 //!    | XPBD | body forces | the last substep's velocity | (x1 − x0)/dt |
+//!    | BDF2 | body forces | (x1 − x̂)/ĥ, x1 by local/global iterations, ĥ = 2dt/3 | (x1 − x0)/dt |
+//!    | VBD | body forces | (x1 − x0)/dt, x1 by vertex block descent | v1 |
 //!
 //!    with a = f/m, and a = 0 for pinned and kinematic particles (inverse mass 0). The methods'
-//!    own code is in `integrators.rs`, `projective.rs` and `xpbd.rs`.
-//! 3. **Damping** ([`damp`]): v *= exp(−μ dt), when μ ≠ 0.
+//!    own code is in `integrators.rs`, `projective.rs`, `xpbd.rs`, `bdf2.rs` and `vbd.rs`.
+//! 3. **Damping** ([`damp`]): v *= exp(−μ dt), when μ ≠ 0 and the method does not take the
+//!    drag inside its solve (BDF2 always does; projective dynamics and VBD when asked).
 //! 4. **Ground** ([`ground`]): a free particle below the ground is put on it and its vertical
 //!    velocity zeroed, when the scene has a ground. The test reads the start-of-step position,
 //!    except for implicit Euler and projective dynamics, which read where the step will end,
@@ -62,6 +65,7 @@ use super::projective::{self, FactorOrder, Projective};
 use super::state::State;
 use super::sweep::{Motion, Sweep};
 use super::xpbd::{self, Xpbd};
+use super::{bdf2, bdf2::Bdf2, vbd, vbd::Vbd};
 use glam::DVec2;
 
 /// What the methods keep from step to step besides the state: the multi-stage and implicit
@@ -72,6 +76,8 @@ pub struct Workspace {
     pub(crate) scratch: Scratch,
     pub(crate) projective: Projective,
     pub(crate) xpbd: Xpbd,
+    pub(crate) bdf2: Bdf2,
+    pub(crate) vbd: Vbd,
     pub(crate) pairs: Pairs,
 }
 
@@ -84,6 +90,8 @@ impl Workspace {
             scratch: self.scratch.repacked(),
             projective: std::mem::take(&mut self.projective),
             xpbd: std::mem::take(&mut self.xpbd),
+            bdf2: std::mem::take(&mut self.bdf2).repacked(),
+            vbd: std::mem::take(&mut self.vbd).repacked(),
             // The lists name particles by index, which the repacking changed.
             pairs: Pairs::default(),
         }
@@ -107,6 +115,17 @@ impl Workspace {
             factor_order: pd.factor_order(),
             xpbd_sweeps_per_step: self.xpbd.sweeps_per_step(),
             xpbd_colours: self.xpbd.colours(),
+            xpbd_constraint_error: self.xpbd.constraint_error(),
+            xpbd_force_carried: self.xpbd.force_carried(),
+            bdf2_iterations_per_step: self.bdf2.iterations_per_step(),
+            bdf2_startup_steps: self.bdf2.startup_steps,
+            bdf2_factorizations: self.bdf2.main.factorizations + self.bdf2.startup.factorizations,
+            bdf2_factorization_seconds: self.bdf2.main.factor_seconds
+                + self.bdf2.startup.factor_seconds,
+            vbd_iterations_per_step: self.vbd.iterations_per_step(),
+            vbd_colours: self.vbd.colours(),
+            vbd_colourings: self.vbd.colourings,
+            vbd_colouring_seconds: self.vbd.colouring_seconds,
             pair_list_builds: self.pairs.rebuilds,
             pair_iterations_per_step: self.pairs.iterations_per_step(),
         }
@@ -155,6 +174,34 @@ pub struct SolveStats {
     pub xpbd_sweeps_per_step: Option<f64>,
     /// XPBD: colours of the constraint graph (sweeps run colour by colour).
     pub xpbd_colours: usize,
+    /// XPBD: after the last step, the largest error of a compliant constraint,
+    /// |C + α̃λ|/L (the springs' violation of what k asks, relative to their rest length),
+    /// measured after the last substep's sweeps.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub xpbd_constraint_error: Option<f64>,
+    /// XPBD: after the last step, the force its springs carry, Σ|λ|/hₛ², as a share of the
+    /// force k asks for at the same stretch, Σ k|C|: under 1, the cloth is softer than its
+    /// stiffness (unconverged sweeps).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub xpbd_force_carried: Option<f64>,
+    /// BDF2: local/global iterations per time step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bdf2_iterations_per_step: Option<f64>,
+    /// BDF2: the backward Euler steps that started (or restarted) its history.
+    pub bdf2_startup_steps: u64,
+    /// BDF2: factorisations, of both its matrices.
+    pub bdf2_factorizations: u64,
+    /// BDF2: their wall time, s.
+    pub bdf2_factorization_seconds: f64,
+    /// VBD: iterations per time step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vbd_iterations_per_step: Option<f64>,
+    /// VBD: colours of the vertex graph.
+    pub vbd_colours: usize,
+    /// VBD: colourings so far (one per change of the springs or pins: all it precomputes).
+    pub vbd_colourings: u64,
+    /// VBD: their wall time, s.
+    pub vbd_colouring_seconds: f64,
     /// Contact between particles: neighbour-list builds so far (a build lists every pair
     /// within 2r plus the skin; the lists are kept while no unlisted pair can have come
     /// within 2r).
@@ -238,6 +285,9 @@ pub struct Method {
     /// The contact radius when particle pairs collide: XPBD pushes pairs apart inside its
     /// substeps too, as it treats the ground.
     pub pair_radius: Option<f64>,
+    /// The air damping μ, 1/s, that the method takes inside its solve (BDF2; projective
+    /// dynamics and VBD when asked); 0 when the damping pass applies it.
+    pub drag: f64,
 }
 
 /// Pass 2: the integrator's update (the Euler methods' [`kick`], or the method's solve).
@@ -249,6 +299,7 @@ pub fn integrate(
     threads: &Threads,
 ) -> Result<(), String> {
     let (dt, g, it) = (m.dt, m.gravity, m.iterations);
+    let drag = m.drag;
     match m.integrator {
         Integrator::ExplicitEuler | Integrator::SymplecticEuler => {
             kick(s, m.integrator, dt, threads)
@@ -261,12 +312,20 @@ pub fn integrate(
             integrators::implicit_euler(s, &mut w.scratch, dt, m.cg, it.newton, g, threads)
         }
         Integrator::ProjectiveDynamics => {
-            projective::step(s, &mut w.projective, dt, it.projective, threads)?
+            projective::step(s, &mut w.projective, dt, drag, it.projective, threads)?
         }
         Integrator::Xpbd => {
-            let (n, sweeps) = (it.xpbd_substeps, it.xpbd_sweeps);
             let pairs = m.pair_radius.map(|r| (&mut w.pairs, r));
-            xpbd::step(s, &mut w.xpbd, dt, (n, sweeps), m.ground, pairs, threads)
+            xpbd::step(s, &mut w.xpbd, dt, &it, m.ground, pairs, threads)
+        }
+        Integrator::Bdf2 => bdf2::step(s, &mut w.bdf2, dt, drag, it.bdf2, m.ground, threads)?,
+        Integrator::Vbd => {
+            let settings = vbd::Settings {
+                iterations: it.vbd,
+                drag,
+                chebyshev: it.vbd_chebyshev,
+            };
+            vbd::step(s, &mut w.vbd, dt, settings, threads)
         }
     }
     Ok(())
@@ -296,8 +355,12 @@ pub fn motion(integrator: Integrator) -> Motion {
     match integrator {
         Integrator::ExplicitEuler => Motion::ExplicitEuler,
         Integrator::SymplecticEuler => Motion::SymplecticEuler,
-        Integrator::ImplicitEuler | Integrator::ProjectiveDynamics => Motion::EndVelocity,
-        Integrator::VelocityVerlet | Integrator::Rk4 | Integrator::Xpbd => Motion::Drift,
+        Integrator::ImplicitEuler | Integrator::ProjectiveDynamics | Integrator::Vbd => {
+            Motion::EndVelocity
+        }
+        Integrator::VelocityVerlet | Integrator::Rk4 | Integrator::Xpbd | Integrator::Bdf2 => {
+            Motion::Drift
+        }
     }
 }
 
@@ -335,11 +398,7 @@ pub fn collide(
             let surface = around.surface(dt, gravity);
             // The methods whose velocity is where the step went (implicit Euler, projective
             // dynamics, XPBD) take the push into it, as position-based dynamics does.
-            let follows = matches!(
-                integrator,
-                Integrator::ImplicitEuler | Integrator::ProjectiveDynamics | Integrator::Xpbd
-            )
-            .then_some(dt);
+            let follows = integrator.unconditionally_stable().then_some(dt);
             w.pairs
                 .collide(s, c.radius, surface, &keep_out, follows, threads)
         }

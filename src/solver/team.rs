@@ -27,6 +27,14 @@ impl<'a> Team<'a> {
         }
     }
 
+    /// Which member this is, from 0, and how many the team has.
+    pub fn index(&self) -> usize {
+        self.index
+    }
+    pub fn size(&self) -> usize {
+        self.size
+    }
+
     /// This member's contiguous share of `range`: the members' shares cover it in order,
     /// each within one of the others' lengths.
     pub fn share(&self, range: Range<usize>) -> Range<usize> {
@@ -157,6 +165,15 @@ impl<T> Shared<T> {
         debug_assert!(i < self.len);
         // SAFETY: as above.
         unsafe { *self.ptr.add(i) = value }
+    }
+
+    /// The whole slice, to read.
+    ///
+    /// # Safety
+    /// No member writes any of it while the borrow lasts (between two barriers).
+    pub unsafe fn read(&self) -> &[T] {
+        // SAFETY: unwritten by the caller's promise.
+        unsafe { std::slice::from_raw_parts(self.ptr, self.len) }
     }
 
     /// Where element `i` is, for a store of its own kind (a vector store of a point).

@@ -23,6 +23,7 @@
 //! thread. (Jacobi with averaging would need no colouring, but it converges more slowly, by a
 //! factor that grows with the number of constraints on a particle.)
 
+use super::method::Iterations;
 use super::pairs::Pairs;
 use super::parallel::Threads;
 use super::state::State;
@@ -91,6 +92,8 @@ pub struct Xpbd {
     /// Positions during the step, and at the start of the substep.
     x: Vec<DVec2>,
     prev: Vec<DVec2>,
+    /// The last substep's size, for the constraint error (0 before the first step).
+    last_hs: f64,
     /// Sweeps so far.
     pub sweeps: u64,
     /// Steps so far.
@@ -106,6 +109,46 @@ impl Xpbd {
     /// Mean sweeps per step so far.
     pub fn sweeps_per_step(&self) -> Option<f64> {
         (self.steps > 0).then(|| self.sweeps as f64 / self.steps as f64)
+    }
+
+    /// The constraints at the end of the last step: the positions the sweeps left, each
+    /// spring's C = |x_a − x_b| − L, its α̃ and its λ of the last substep.
+    fn ends(&self) -> impl Iterator<Item = (f64, &Constraint, &Multiplier)> {
+        let x = &self.x;
+        (self.steps > 0 && self.last_hs > 0.0)
+            .then_some(())
+            .into_iter()
+            .flat_map(move |_| self.constraints.iter().zip(&self.multipliers))
+            .map(move |(c, m)| {
+                let l = (x[c.a as usize] - x[c.b as usize]).length();
+                (l - c.rest, c, m)
+            })
+    }
+
+    /// After the last step, the largest error of a compliant constraint, |C + α̃λ|/L (|C + α̃λ|
+    /// for a spring of rest length 0): how far the sweeps left each spring from the force
+    /// balance its stiffness asks for, relative to its length. `None` before the first step.
+    pub fn constraint_error(&self) -> Option<f64> {
+        let worst = self
+            .ends()
+            .filter(|(_, _, m)| m.inv_den != 0.0)
+            .map(|(cv, c, m)| relative(cv + m.alpha * m.lambda, c.rest))
+            .fold(None, |w: Option<f64>, e| Some(w.map_or(e, |w| w.max(e))));
+        worst.filter(|w| w.is_finite())
+    }
+
+    /// After the last step, the force the springs carry, Σ|λ|/hₛ², over the force their
+    /// stiffness asks for at the same stretch, Σ k|C|: 1 when the sweeps converged; below 1 the
+    /// cloth is that much softer than k says. `None` before the first step or when nothing is
+    /// stretched.
+    pub fn force_carried(&self) -> Option<f64> {
+        let inv_h2 = 1.0 / (self.last_hs * self.last_hs);
+        let (mut carried, mut asked) = (0.0, 0.0);
+        for (cv, _, m) in self.ends().filter(|(_, _, m)| m.alpha > 0.0) {
+            carried += m.lambda.abs() * inv_h2;
+            asked += cv.abs() / m.compliance;
+        }
+        (asked > 0.0 && carried.is_finite()).then(|| carried / asked)
     }
 
     /// Greedy colouring in packed order: each spring takes the lowest colour neither of its ends
@@ -452,30 +495,44 @@ impl Moved {
     }
 }
 
-/// More than one sweep a substep: λ accumulates over the sweeps.
+/// |e|/L, or |e| for a spring of rest length 0.
+#[inline(always)]
+fn relative(e: f64, rest: f64) -> f64 {
+    if rest > 0.0 { e.abs() / rest } else { e.abs() }
+}
+
+/// More than one sweep a substep (or the last substep, whose λ the constraint error reads): λ
+/// accumulates over the sweeps. Returns the largest |C + α̃λ|/L met before a projection.
 fn project_with_multipliers(
     constraints: &[Constraint],
     multipliers: &mut [Multiplier],
     x: Positions,
-) {
+) -> f64 {
+    let mut worst: f64 = 0.0;
     for (c, m) in constraints.iter().zip(multipliers) {
         project_one(c, x, |minus_c| {
             let g = minus_c - m.alpha * m.lambda;
+            if m.inv_den != 0.0 {
+                worst = worst.max(relative(g, c.rest));
+            }
             m.lambda += g * m.inv_den;
             g
         });
     }
+    worst
 }
 
 /// A sweep over constraints with dashpots (see [`Damped`]), from the substep's start `prev`;
-/// λ is kept in `multipliers` when there are several sweeps a substep.
+/// λ is kept in `multipliers` when there are several sweeps a substep. Returns the largest
+/// |C + α̃λ|/L met before a projection (with λ kept).
 fn project_damped(
     constraints: &[Constraint],
     damped: &[Damped],
     mut multipliers: Option<&mut [Multiplier]>,
     x: Positions,
     prev: Positions,
-) {
+) -> f64 {
+    let mut worst: f64 = 0.0;
     for (k, (c, d)) in constraints.iter().zip(damped).enumerate() {
         let (a, b) = (c.a as usize, c.b as usize);
         // SAFETY: a and b belong to this constraint alone within the colour.
@@ -491,6 +548,9 @@ fn project_damped(
         let moved = n.dot((xa - pa) - (xb - pb));
         let mut g = c.rest - len - d.gamma * moved;
         if let Some(m) = multipliers.as_deref_mut().map(|m| &mut m[k]) {
+            if m.inv_den != 0.0 {
+                worst = worst.max(relative(c.rest - len - m.alpha * m.lambda, c.rest));
+            }
             g -= m.alpha * m.lambda;
             m.lambda += g * d.inv_den;
         }
@@ -500,6 +560,7 @@ fn project_damped(
             x.set(b, xb - n * (d.cb * g));
         }
     }
+    worst
 }
 
 /// The prediction of one particle (see the module docs): `end` is where the sweeps left it.
@@ -526,7 +587,7 @@ pub fn step(
     s: &mut State,
     xp: &mut Xpbd,
     dt: f64,
-    (substeps, sweeps): (u32, u32),
+    it: &Iterations,
     ground: Option<f64>,
     pairs: Option<(&mut Pairs, f64)>,
     threads: &Threads,
@@ -540,8 +601,17 @@ pub fn step(
     xp.x.clear();
     xp.x.extend_from_slice(&s.x);
     xp.prev.resize(n, DVec2::ZERO);
-    let substeps = substeps.max(1);
+    let substeps = it.xpbd_substeps.max(1);
+    let sweeps = it.xpbd_sweeps.max(1);
+    // With a tolerance, sweeps go on past `sweeps` until the constraint error is under it.
+    let tolerance = it.xpbd_tolerance;
+    let cap = if tolerance > 0.0 {
+        it.xpbd_max_sweeps.max(sweeps)
+    } else {
+        sweeps
+    };
     let hs = dt / substeps as f64;
+    xp.last_hs = hs;
     let inv_hs = 1.0 / hs;
     let floor = ground.unwrap_or(f64::NEG_INFINITY);
     xp.prepare(s, hs);
@@ -583,6 +653,11 @@ pub fn step(
     let (f, w) = (&s.f[..], &s.inv_mass[..]);
     let (constraints, colour_starts) = (&xp.constraints[..], &xp.colour_starts[..]);
     let damped = &xp.damped[..];
+    // Each member's largest constraint error in the sweep just done, to decide together
+    // whether to sweep again; and the sweeps run.
+    let mut worst = vec![0.0f64; threads.threads().max(1)];
+    let worst = Shared::new(&mut worst);
+    let swept = std::sync::atomic::AtomicU64::new(0);
     threads.team(springs, |team| {
         let mine = team.share(0..n);
         for substep in 0..substeps {
@@ -625,30 +700,57 @@ pub fn step(
                 }
             }
             team.wait();
-            for sweep in 0..sweeps {
+            // λ is kept with several sweeps, a tolerance, and on the last substep (the
+            // constraint error reads it).
+            let keep = cap > 1 || substep + 1 == substeps;
+            let mut sweep = 0;
+            loop {
+                let mut mine_worst: f64 = 0.0;
                 for colour in colour_starts.windows(2) {
                     let range = team.share(colour[0]..colour[1]);
                     let constraints = &constraints[range.clone()];
                     if !damped.is_empty() {
                         // SAFETY: this member's constraints of the colour.
-                        let mut m =
-                            (sweeps > 1).then(|| unsafe { multipliers.part(range.clone()) });
+                        let mut m = keep.then(|| unsafe { multipliers.part(range.clone()) });
                         if let Some(m) = m.as_deref_mut().filter(|_| sweep == 0) {
                             m.iter_mut().for_each(|m| m.lambda = 0.0);
                         }
-                        project_damped(constraints, &damped[range], m, positions, starts);
-                    } else if sweeps > 1 {
+                        let w = project_damped(constraints, &damped[range], m, positions, starts);
+                        mine_worst = mine_worst.max(w);
+                    } else if keep {
                         // SAFETY: this member's constraints of the colour (see above).
                         let m = unsafe { multipliers.part(range) };
                         if sweep == 0 {
                             m.iter_mut().for_each(|m| m.lambda = 0.0);
                         }
-                        project_with_multipliers(constraints, m, positions);
+                        mine_worst =
+                            mine_worst.max(project_with_multipliers(constraints, m, positions));
                     } else {
                         project(constraints, positions);
                     }
                     team.wait();
                 }
+                sweep += 1;
+                if sweep >= cap {
+                    break;
+                }
+                if sweep >= sweeps {
+                    // Past the least count, only with a tolerance: the members' errors
+                    // together decide (each reads every member's after the barrier, and
+                    // every member decides the same).
+                    // SAFETY: each member writes its own slot; the barrier orders the
+                    // writes before the reads, and the next sweep's colour barriers order
+                    // these reads before the next writes.
+                    unsafe { worst.set(team.index(), mine_worst) };
+                    team.wait();
+                    let all = unsafe { worst.part(0..team.size()) };
+                    if all.iter().all(|&w| w < tolerance) {
+                        break;
+                    }
+                }
+            }
+            if team.index() == 0 {
+                swept.fetch_add(sweep as u64, std::sync::atomic::Ordering::Relaxed);
             }
             if let Some((pairs, contact)) = pairs {
                 // One member: the one whose share of a single item is not empty.
@@ -680,7 +782,7 @@ pub fn step(
             u[i] = (end - x0[i]) * inv_h;
         }
     });
-    xp.sweeps += substeps as u64 * sweeps as u64;
+    xp.sweeps += swept.into_inner();
     xp.steps += 1;
 }
 
@@ -759,7 +861,12 @@ mod tests {
                 .collect();
             let mut worst: f64 = 0.0;
             for _ in 0..120 {
-                step(&mut s, &mut xp, dt, (20, 200), None, None, &threads);
+                let it = Iterations {
+                    xpbd_substeps: 20,
+                    xpbd_sweeps: 200,
+                    ..Default::default()
+                };
+                step(&mut s, &mut xp, dt, &it, None, None, &threads);
                 for i in 0..s.x.len() {
                     s.x[i] += s.drift[i] * dt;
                 }

@@ -83,6 +83,8 @@ fn edit_label(old: &SimParams, new: &SimParams) -> Option<&'static str> {
         Some("damping")
     } else if old.spring_damping != new.spring_damping {
         Some("spring damping")
+    } else if old.drag_in_solve != new.drag_in_solve {
+        Some("drag in the solve")
     } else if old.dt != new.dt {
         Some("dt")
     } else if old.ground != new.ground {
@@ -285,6 +287,23 @@ pub fn side_panel(
                 .on_hover_text("air drag: slows every motion, falling included");
                 ui.end_row();
 
+                if p.integrator.can_drag_in_solve() || p.integrator.drags_in_solve() {
+                    ui.label("");
+                    let mut inside = p.drag_in_solve || p.integrator.drags_in_solve();
+                    let toggle = egui::Checkbox::new(&mut inside, "μ inside the solve");
+                    let response = ui
+                        .add_enabled(!p.integrator.drags_in_solve(), toggle)
+                        .on_hover_text(
+                            "the drag as the force −μ m v in the implicit solve, not exp(−μ dt) \
+                             after the step: at 1/60 s the splitting doubles the error (BDF2 \
+                             always takes it inside)",
+                        );
+                    if response.changed() {
+                        p.drag_in_solve = inside;
+                    }
+                    ui.end_row();
+                }
+
                 ui.label("Dashpot c");
                 ui.add(slider(&mut p.spring_damping, 0.0..=20.0).suffix(" N·s/m"))
                     .on_hover_text(
@@ -421,6 +440,11 @@ pub fn side_panel(
             // Stability and accuracy
             stability_readout(ui, &stability, p.integrator);
             accuracy_readout(ui, p.integrator, p.dt, solver.particle_count());
+            if p.integrator == Integrator::Xpbd
+                && let Some(line) = xpbd_softness(&solver.solve_stats())
+            {
+                ui.colored_label(AMBER, line);
+            }
             ui.separator();
 
             // Live figures
@@ -510,11 +534,58 @@ fn iteration_rows(ui: &mut egui::Ui, integrator: Integrator, it: &mut Iterations
                 "Sweeps",
                 &mut it.xpbd_sweeps,
                 50,
-                "constraint sweeps per substep",
+                "constraint sweeps per substep (the least, with a tolerance)",
+            );
+            ui.label("Tolerance");
+            ui.add(
+                slider(&mut it.xpbd_tolerance, 0.0..=0.1)
+                    .logarithmic(true)
+                    .custom_formatter(|v, _| {
+                        if v == 0.0 {
+                            "off".into()
+                        } else {
+                            format!("{v:.0e}")
+                        }
+                    }),
+            )
+            .on_hover_text(
+                "sweep each substep until the largest constraint error |C + α̃λ|/L is under \
+                 this, up to the cap; 0 = off",
+            );
+            ui.end_row();
+        }
+        Integrator::Bdf2 => row(
+            ui,
+            "Iterations",
+            &mut it.bdf2,
+            500,
+            "local/global iterations per step; its two matrices are factored once",
+        ),
+        Integrator::Vbd => {
+            row(
+                ui,
+                "Iterations",
+                &mut it.vbd,
+                500,
+                "sweeps over every vertex per step, colour by colour; nothing is factored",
             );
         }
         _ => {}
     }
+}
+
+/// XPBD's convergence after the last step, when its springs are softer than k says: the
+/// largest constraint error and the share of k's force they carry.
+fn xpbd_softness(stats: &crate::sim::SolveStats) -> Option<String> {
+    let carried = stats.xpbd_force_carried?;
+    let error = stats.xpbd_constraint_error.unwrap_or(0.0);
+    (carried < 0.95).then(|| {
+        format!(
+            "XPBD: constraint error {error:.1e} of L; its springs carry {:.0} % of the force k \
+             asks, so the cloth is softer than its stiffness (more sweeps or a tolerance fix it)",
+            100.0 * carried
+        )
+    })
 }
 
 /// The panel's other resources (a system takes at most 16 parameters).

@@ -12,8 +12,9 @@ pub fn order(i: Integrator) -> u32 {
         | Integrator::SymplecticEuler
         | Integrator::ImplicitEuler
         | Integrator::ProjectiveDynamics
-        | Integrator::Xpbd => 1,
-        Integrator::VelocityVerlet => 2,
+        | Integrator::Xpbd
+        | Integrator::Vbd => 1,
+        Integrator::VelocityVerlet | Integrator::Bdf2 => 2,
         Integrator::Rk4 => 4,
     }
 }
