@@ -11,11 +11,11 @@ use glam::DVec2;
 ///
 /// The assignment's rule tests the start-of-step position: a particle may end a step below the
 /// ground by dt·|v_y| and is put back at the start of the next. At its dt of 1e-4 s that is a
-/// micrometre. The methods made for large steps (implicit Euler, projective dynamics) would
+/// micrometre. The methods made for large steps (implicit Euler, projective dynamics, VBD) would
 /// end every step of a resting cloth 1–2 cm under the ground at 1/30 s, bunching its bottom
 /// rows there; they test where the step ends instead, x + dt v with the velocity that
 /// moves the particle, so that a particle ends each step on or above the ground. (XPBD
-/// resolves contact inside its substeps.)
+/// resolves contact inside its substeps, and BDF2 clamps its end positions inside its step.)
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Contact {
     /// The start-of-step position x.
@@ -61,10 +61,10 @@ pub enum Motion {
     /// after damping and ground).
     SymplecticEuler,
     /// No kick (the integrator solved for v already); the position update with the end
-    /// velocity (implicit Euler, projective dynamics).
+    /// velocity (implicit Euler, projective dynamics, VBD).
     EndVelocity,
     /// No kick; the position update with the integrator's drift velocities (velocity Verlet,
-    /// RK4, XPBD).
+    /// RK4, XPBD, BDF2).
     Drift,
 }
 
