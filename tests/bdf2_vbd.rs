@@ -33,17 +33,6 @@ fn ron_name(i: Integrator) -> &'static str {
     }
 }
 
-fn set_iterations(app: &mut bevy::prelude::App, iterations: Iterations) {
-    app.world_mut().resource_mut::<SimParams>().iterations = iterations;
-}
-
-fn max_difference(a: &[DVec2], b: &[DVec2]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(p, q)| (*p - *q).length())
-        .fold(0.0, f64::max)
-}
-
 /// The packed system an independent step reads: masses, pins, springs, gravity.
 struct System {
     mass: Vec<f64>,

@@ -34,17 +34,6 @@ fn free_chain(integrator: Integrator, dt: f64, n: usize, k: f64) -> Scene {
     scene
 }
 
-fn set_iterations(app: &mut bevy::prelude::App, iterations: Iterations) {
-    app.world_mut().resource_mut::<SimParams>().iterations = iterations;
-}
-
-fn max_difference(a: &[DVec2], b: &[DVec2]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(p, q)| (*p - *q).length())
-        .fold(0.0, f64::max)
-}
-
 /// Projective dynamics minimises the backward Euler objective; Newton's method solves its
 /// optimality condition. Both iterated to convergence give the same step, to 1e-8 (here
 /// ~1e-12), on the 2D network (four particles of three masses, one pinned), on a stiff

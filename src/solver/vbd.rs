@@ -68,8 +68,6 @@ pub struct Vbd {
     /// adaptive initialisation).
     last_v: Vec<DVec2>,
     last_edits: Option<u64>,
-    /// Steps whose descent started from the start-of-step positions (see [`step`]).
-    pub still_starts: u64,
     /// Colourings so far, and their wall time, s.
     pub colourings: u64,
     pub colouring_seconds: f64,
@@ -333,7 +331,6 @@ pub fn step(s: &mut State, vb: &mut Vbd, dt: f64, settings: Settings, threads: &
     let (inertial, still) = objectives(s, (&vb.x, &vb.before), &vb.y, inertia);
     if still < inertial {
         std::mem::swap(&mut vb.x, &mut vb.before);
-        vb.still_starts += 1;
     }
     let has_gas = !s.materials.gas().is_empty();
     let iterations = settings.iterations.max(1);

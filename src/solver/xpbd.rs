@@ -114,11 +114,11 @@ impl Xpbd {
     /// The constraints at the end of the last step: the positions the sweeps left, each
     /// spring's C = |x_a − x_b| − L, its α̃ and its λ of the last substep.
     fn ends(&self) -> impl Iterator<Item = (f64, &Constraint, &Multiplier)> {
-        let x = &self.x;
-        (self.steps > 0 && self.last_hs > 0.0)
-            .then_some(())
-            .into_iter()
-            .flat_map(move |_| self.constraints.iter().zip(&self.multipliers))
+        let (x, stepped) = (&self.x, self.steps > 0 && self.last_hs > 0.0);
+        let constraints = if stepped { &self.constraints[..] } else { &[] };
+        constraints
+            .iter()
+            .zip(&self.multipliers)
             .map(move |(c, m)| {
                 let l = (x[c.a as usize] - x[c.b as usize]).length();
                 (l - c.rest, c, m)

@@ -84,3 +84,16 @@ pub fn shared_dir() -> Option<std::path::PathBuf> {
     let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared");
     p.is_dir().then_some(p)
 }
+
+/// Sets the iterative methods' counts.
+pub fn set_iterations(app: &mut App, iterations: sim::Iterations) {
+    app.world_mut().resource_mut::<sim::SimParams>().iterations = iterations;
+}
+
+/// The largest distance between two sets of points, m.
+pub fn max_difference(a: &[DVec2], b: &[DVec2]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| (*p - *q).length())
+        .fold(0.0, f64::max)
+}
