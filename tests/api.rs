@@ -119,3 +119,31 @@ fn spring_edits_alone_reach_the_solver() {
     assert_ne!(moved, DVec2::new(0.7, 0.7));
     assert_eq!(world.get::<Position>(c).unwrap().0, moved);
 }
+
+/// The solver core's public paths from before its rooms were made still resolve: the root's
+/// re-exports unchanged, the moved modules through deprecated re-exports (a user's build warns
+/// and names the new path, and does not break).
+#[test]
+#[allow(deprecated)]
+fn the_core_paths_from_before_its_rooms_still_resolve() {
+    use hooke::solver::contact::{ContactSettings, Surroundings};
+    use hooke::solver::{material, obstacle, pairs, state, step};
+    let _ = (
+        std::any::type_name::<ContactSettings>(),
+        std::any::type_name::<Surroundings>(),
+        std::any::type_name::<state::PackedSpring>(),
+        std::any::type_name::<step::Workspace>(),
+    );
+    assert_eq!(
+        std::any::type_name::<material::Materials>(),
+        std::any::type_name::<hooke::solver::forces::material::Materials>()
+    );
+    assert_eq!(
+        std::any::type_name::<obstacle::Shape>(),
+        std::any::type_name::<hooke::solver::Shape>()
+    );
+    assert_eq!(
+        std::any::type_name::<pairs::Pairs>(),
+        std::any::type_name::<hooke::solver::contact::pairs::Pairs>()
+    );
+}

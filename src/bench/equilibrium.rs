@@ -5,8 +5,8 @@
 //! semi-definite) and a backtracking line search on U. Pinned particles stay where they are.
 
 use crate::sim::{PackedSpring, Solver};
-use crate::solver::kernels;
-use crate::solver::stiffness::{self, Block};
+use crate::solver::forces::kernels;
+use crate::solver::forces::stiffness::{self, Block};
 use bevy::math::DVec2;
 
 /// The forces −∇U at x: body forces plus springs, zero on fixed particles.

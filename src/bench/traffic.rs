@@ -37,7 +37,7 @@ pub fn bandwidth(bytes: usize, threads: usize) -> Result<f64, String> {
         .map_err(|e| format!("cannot start {threads} threads: {e}"))?;
     let n = (bytes / 8).max(1024);
     // On huge pages where the system has them, as the step's own arrays are.
-    let mut a: Vec<f64> = crate::solver::pages::with_capacity(n);
+    let mut a: Vec<f64> = crate::solver::threads::pages::with_capacity(n);
     a.extend((0..n).map(|i| i as f64));
     let chunk = n.div_ceil(threads);
     // Several sweeps per timing on small arrays, so that starting the threads does not count.

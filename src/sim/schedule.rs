@@ -84,7 +84,7 @@ pub enum StepSystems {
     ///    finiteness.
     Advance,
     /// 6. Contact between particles when [`SimParams::contact`] asks for it
-    ///    ([`crate::solver::pairs`]), then with the obstacles, and with the ground when contact
+    ///    ([`crate::solver::contact::pairs`]), then with the obstacles, and with the ground when contact
     ///    is set ([`crate::solver::contact`]); then the obstacles move by their velocities.
     ///    Runs only when the scene has obstacles, contact with a ground, or particle pairs.
     Collide,

@@ -11,7 +11,8 @@
 use super::components::*;
 use super::params::SimParams;
 use super::solver::Solver;
-use crate::solver::{PackedSpring, State, pages};
+use crate::solver::threads::pages;
+use crate::solver::{PackedSpring, State};
 use bevy::ecs::system::SystemParam;
 use bevy::math::DVec2;
 use bevy::prelude::*;

@@ -21,9 +21,9 @@
 //! one-step map ([`stable_dt_damped`]): the largest h below which its spectral radius stays
 //! at most 1.
 
+use super::forces::stiffness;
 use super::method::{Integrator, Iterations};
 use super::state::State;
-use super::stiffness;
 use glam::DVec2;
 
 /// The stability picture of the current scene and settings ([`estimate`]; the Bevy layer's

@@ -5,21 +5,9 @@
 //! file) is the adapter's business: the Bevy layer keeps the entities beside it
 //! ([`crate::sim::Solver`]) and rebuilds or patches it when they change.
 
-use super::material::Materials;
+use super::forces::material::Materials;
+pub use super::packed::PackedSpring;
 use glam::DVec2;
-
-/// A spring between two dense particle indices.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PackedSpring {
-    /// Dense index of one end.
-    pub a: u32,
-    /// Dense index of the other end.
-    pub b: u32,
-    /// Rest length, m.
-    pub rest: f64,
-    /// The stiffness in effect: the spring's own, or the global override.
-    pub k: f64,
-}
 
 /// The particles' and springs' packed arrays. Read it through the accessors; the adapter
 /// that owns it writes it, and the step's passes ([`super::step`]) step it.

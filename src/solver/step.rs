@@ -7,7 +7,7 @@
 //! 1. **Forces** ([`forces`]): f = m g + f_ext + Σ springs at the start-of-step positions, each
 //!    spring evaluated once and scattered to its two ends, then, when the scene has them, the
 //!    dashpots at the start-of-step velocities and the gas pressure
-//!    ([`super::material`]). Methods that work on positions (projective dynamics, XPBD) take
+//!    ([`super::forces::material`]). Methods that work on positions (projective dynamics, XPBD) take
 //!    only the body forces m g + f_ext ([`body_forces`]) and treat the materials in their
 //!    solves.
 //! 2. **Integrate** ([`integrate`]): the integrator's end-of-step velocity v1, and the drift
@@ -26,7 +26,7 @@
 //!    | VBD | body forces | (x1 − x0)/dt, x1 by vertex block descent | v1 |
 //!
 //!    with a = f/m, and a = 0 for pinned and kinematic particles (inverse mass 0). The methods'
-//!    own code is in `integrators.rs`, `projective.rs`, `xpbd.rs`, `bdf2.rs` and `vbd.rs`.
+//!    own code is in `methods/`, a file a method.
 //! 3. **Damping** ([`damp`]): v *= exp(−μ dt), when μ ≠ 0 and the method does not take the
 //!    drag inside its solve (BDF2 always does; projective dynamics and VBD when asked).
 //! 4. **Ground** ([`ground`]): a free particle below the ground is put on it and its vertical
@@ -39,7 +39,7 @@
 //!    and a check that everything stayed finite.
 //! 6. **Collide** ([`collide`]): only when the scene has obstacles or contact settings. First,
 //!    with `particles` on, pairs of particles closer than 2r are pushed apart and lose their
-//!    approach velocity ([`super::pairs`]). Then each
+//!    approach velocity ([`super::contact::pairs`]). Then each
 //!    free particle that ended the step within its radius of an obstacle (or of the ground,
 //!    when contact is set: the ground then leaves pass 4) is put back on the surface, after a
 //!    swept test of its path so that it cannot pass through a thin one, and its velocity
@@ -55,17 +55,21 @@
 //! Every function here takes the packed [`State`], the per-method buffers ([`Workspace`]) and
 //! the thread pool ([`Threads`]); none knows who owns the particles.
 
+use super::contact::pairs::{PairReport, Pairs};
 use super::contact::{self, Surroundings};
-use super::integrators::{self, CgSettings, Scratch};
-use super::kernels;
+use super::forces::kernels;
+use super::forces::sweep::{Motion, Sweep};
 use super::method::{Integrator, Iterations};
-use super::pairs::{PairReport, Pairs};
-use super::parallel::Threads;
-use super::projective::{self, FactorOrder, Projective};
+use super::methods::bdf2::{self, Bdf2};
+use super::methods::evaluate::{self, forces_at};
+use super::methods::explicit::{rk4, velocity_verlet};
+use super::methods::implicit_euler::{CgSettings, implicit_euler};
+use super::methods::projective::{self, FactorOrder, Projective};
+use super::methods::scratch::Scratch;
+use super::methods::vbd::{self, Vbd};
+use super::methods::xpbd::{self, Xpbd};
 use super::state::State;
-use super::sweep::{Motion, Sweep};
-use super::xpbd::{self, Xpbd};
-use super::{bdf2, bdf2::Bdf2, vbd, vbd::Vbd};
+use super::threads::Threads;
 use glam::DVec2;
 
 /// What the methods keep from step to step besides the state: the multi-stage and implicit
@@ -214,7 +218,7 @@ pub struct SolveStats {
 /// Pass 1, the body forces alone: f = m g + f_ext (what the position-based methods read).
 pub fn body_forces(s: &mut State, gravity: DVec2, threads: &Threads) {
     let external = s.external_active.then_some(&s.external[..]);
-    integrators::body_forces(
+    evaluate::body_forces(
         threads,
         s.springs.len(),
         &mut s.f,
@@ -230,7 +234,7 @@ pub fn body_forces(s: &mut State, gravity: DVec2, threads: &Threads) {
 pub fn forces(s: &mut State, w: &mut Workspace, gravity: DVec2, threads: &Threads) {
     let mut f = std::mem::take(&mut s.f);
     let xv = (&s.x[..], &s.v[..]);
-    integrators::forces_at(s, &mut w.scratch.pairs, &mut f, xv, gravity, threads);
+    forces_at(s, &mut w.scratch.pairs, &mut f, xv, gravity, threads);
     s.f = f;
 }
 
@@ -304,12 +308,10 @@ pub fn integrate(
         Integrator::ExplicitEuler | Integrator::SymplecticEuler => {
             kick(s, m.integrator, dt, threads)
         }
-        Integrator::VelocityVerlet => {
-            integrators::velocity_verlet(s, &mut w.scratch, dt, g, threads)
-        }
-        Integrator::Rk4 => integrators::rk4(s, &mut w.scratch, dt, g, threads),
+        Integrator::VelocityVerlet => velocity_verlet(s, &mut w.scratch, dt, g, threads),
+        Integrator::Rk4 => rk4(s, &mut w.scratch, dt, g, threads),
         Integrator::ImplicitEuler => {
-            integrators::implicit_euler(s, &mut w.scratch, dt, m.cg, it.newton, g, threads)
+            implicit_euler(s, &mut w.scratch, dt, m.cg, it.newton, g, threads)
         }
         Integrator::ProjectiveDynamics => {
             projective::step(s, &mut w.projective, dt, drag, it.projective, threads)?
@@ -380,7 +382,7 @@ pub fn advance(s: &mut State, integrator: Integrator, dt: f64, threads: &Threads
     s.non_finite = !finite;
 }
 
-/// Pass 6: contact between particles (when the settings ask for it, [`super::pairs`]), then
+/// Pass 6: contact between particles (when the settings ask for it, [`super::contact::pairs`]), then
 /// with the obstacles, and with the ground when contact is set ([`super::contact`]), on where
 /// the step ended. Returns the contacts it resolved.
 pub fn collide(

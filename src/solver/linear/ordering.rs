@@ -8,7 +8,7 @@
 //! minimum degree order (3.49 M against 3.47 M) in 10,282 supernodes instead of 17,367, and the
 //! narrow ones are what a substitution pays for beyond its values
 //! (`cargo test --release --lib substitutions_against -- --ignored --nocapture` times both).
-//! Which order a factorisation uses is decided in [`super::projective`], by a model of the
+//! Which order a factorisation uses is decided in [`crate::solver::methods::projective`], by a model of the
 //! substitutions' cost.
 //!
 //! Each cut is at the median of the set's longer extent; the separator is the particles of

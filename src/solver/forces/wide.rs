@@ -12,16 +12,12 @@
 #![cfg(target_arch = "x86_64")]
 
 use super::spring::{MIN_SPRING_LENGTH, Run, projection_residual, spring_force};
-use super::state::PackedSpring;
 use super::sweep::{Contact, SweepArrays};
+use crate::solver::packed::PackedSpring;
 use glam::DVec2;
 use std::arch::x86_64::*;
 
-/// Does this CPU have AVX? (Detected once; later calls read a cached flag.)
-#[inline]
-pub fn available() -> bool {
-    std::is_x86_feature_detected!("avx")
-}
+pub(crate) use crate::solver::threads::machine::avx as available;
 
 /// [`super::kernels::for_each_spring_force`], four springs at a time.
 ///
@@ -116,7 +112,7 @@ unsafe fn four_differences(x: &[DVec2], s: &[PackedSpring]) -> (__m256d, __m256d
 /// Four springs' ends in registers, two points to a register ([p0, p1] as x0, y0, x1, y1),
 /// with d = a − b and √(d·d) in the lane order [0, 2, 1, 3]: what the force pass, the
 /// projective local step and the XPBD sweep all start from.
-pub(super) struct Quad {
+pub(crate) struct Quad {
     pub a01: __m256d,
     pub a23: __m256d,
     pub b01: __m256d,
@@ -131,7 +127,7 @@ impl Quad {
     /// The CPU must support AVX ([`available`]); always inlined, it inherits AVX from its
     /// caller.
     #[inline(always)]
-    pub(super) unsafe fn of(a: [DVec2; 4], b: [DVec2; 4]) -> Quad {
+    pub(crate) unsafe fn of(a: [DVec2; 4], b: [DVec2; 4]) -> Quad {
         // SAFETY: the caller guarantees AVX.
         unsafe {
             // No closure here: closures do not inherit AVX.
@@ -163,13 +159,13 @@ impl Quad {
 /// # Safety
 /// The CPU must support AVX ([`available`]); always inlined, it inherits AVX from its caller.
 #[inline(always)]
-pub(super) unsafe fn lanes(v: [f64; 4]) -> __m256d {
+pub(crate) unsafe fn lanes(v: [f64; 4]) -> __m256d {
     // SAFETY: the caller guarantees AVX. `_mm256_set_pd` takes the lanes high to low.
     unsafe { _mm256_set_pd(v[3], v[1], v[2], v[0]) }
 }
 
 /// A mask in [`Quad`]'s lane order [0, 2, 1, 3] (bit i for lane i) in spring order.
-pub(super) fn spring_order(mask: i32) -> i32 {
+pub(crate) fn spring_order(mask: i32) -> i32 {
     (mask & 0b1001) | ((mask & 0b0010) << 1) | ((mask & 0b0100) >> 1)
 }
 
@@ -205,7 +201,7 @@ unsafe fn four_forces(x: &[DVec2], s: &[PackedSpring], out: &mut [f64; 8]) -> i3
     }
 }
 
-/// Projective dynamics' local step ([`super::projective`]) four springs at a time: for each
+/// Projective dynamics' local step ([`crate::solver::methods::projective`]) four springs at a time: for each
 /// spring, `add(a, c)` and `add(b, −c)` with c = l · (L / |l| − 1) · h²k, l = x_a − x_b
 /// (c = 0 where |l| is 0 or not a number). The operations are [`projection_residual`]'s, in
 /// its order, so the bits are the scalar step's.
@@ -359,8 +355,8 @@ pub unsafe fn particle_sweep<const MOTION: u8, const DAMP: bool, const GROUND: b
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::solver::bits;
-    use crate::solver::spring::scatter_pairs;
+    use crate::solver::fixtures::bits;
+    use crate::solver::forces::spring::scatter_pairs;
 
     /// Forces from the AVX pass and the scalar pass, for springs of every kind: runs sharing an
     /// end, a zero-length spring, one with a NaN end, and a tail that is not a whole quad.
@@ -452,7 +448,7 @@ mod tests {
         if !available() {
             return;
         }
-        use crate::solver::sweep::sweep_portable;
+        use crate::solver::forces::sweep::sweep_portable;
         let n = 41;
         let start = |bad: bool| {
             let x: Vec<DVec2> = (0..n)
@@ -562,7 +558,11 @@ mod tests {
         let mut scalar = vec![DVec2::ZERO; x.len()];
         scatter_pairs(
             &springs,
-            |s| Some(super::super::spring::projection_residual(s, &x, h2)),
+            |s| {
+                Some(crate::solver::forces::spring::projection_residual(
+                    s, &x, h2,
+                ))
+            },
             |i, c| scalar[i] += c,
         );
         assert_eq!(bits(&wide), bits(&scalar));

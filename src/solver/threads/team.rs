@@ -202,8 +202,8 @@ impl<T> Shared<T> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::parallel::Threads;
     use super::*;
+    use crate::solver::threads::Threads;
 
     /// The shares of any range cover it in order, without overlap, for teams of 1 to 5.
     #[test]
@@ -253,14 +253,14 @@ mod tests {
 /// `cargo test --release --lib what_a_team_costs -- --ignored --nocapture`.
 #[cfg(test)]
 mod measurement {
-    use super::super::parallel::Threads;
+    use crate::solver::threads::Threads;
     use std::time::Instant;
 
     #[test]
     #[ignore = "a measurement: prints figures, asserts nothing"]
     fn what_a_team_costs() {
         let threads = Threads::new(2).unwrap();
-        println!("on {}", crate::bench::machine());
+        println!("on {}", crate::solver::threads::machine());
         for _ in 0..3 {
             let clock = Instant::now();
             threads.team(usize::MAX, |team| (0..100_000).for_each(|_| team.wait()));

@@ -7,9 +7,9 @@
 //! springs so that K stays positive semi-definite. Springs shorter than
 //! [`super::spring::MIN_SPRING_LENGTH`] contribute nothing.
 
-use super::parallel::{self, Pair, PairPass, SpringBuffers, Threads};
 use super::spring::{self, MIN_SPRING_LENGTH};
-use super::state::PackedSpring;
+use crate::solver::packed::PackedSpring;
+use crate::solver::threads::{Pair, PairPass, SpringBuffers, Threads, scatter_from};
 use glam::DVec2;
 
 /// One spring's block k α I + k (1 − α) d̂d̂ᵀ, with the spring's ends: all that applying K
@@ -138,7 +138,7 @@ pub fn apply(out: &mut [DVec2], u: &[DVec2], blocks: &[Block]) {
     KTimes(u).run(blocks, |i, g| out[i] += g);
 }
 
-/// out = K u on the pool's threads when worthwhile (see [`parallel::scatter`]); `buffers`
+/// out = K u on the pool's threads when worthwhile (see [`scatter_from`]); `buffers`
 /// caches the split of these blocks.
 pub fn apply_threaded(
     threads: &Threads,
@@ -148,5 +148,32 @@ pub fn apply_threaded(
     blocks: &[Block],
 ) {
     let zero = |_: usize, out: &mut [DVec2]| out.fill(DVec2::ZERO);
-    parallel::scatter_from(threads, buffers, out, blocks, &KTimes(u), &zero);
+    scatter_from(threads, buffers, out, blocks, &KTimes(u), &zero);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solver::fixtures::{assert_round_off, grid, positions};
+
+    /// K u through the threaded pair scatter gives the serial product up to round-off.
+    #[test]
+    fn threaded_stiffness_product_matches_the_serial_one() {
+        let (n, springs) = (160 * 160, grid(160, 160));
+        let x = positions(n);
+        let mut blocks = vec![];
+        super::blocks(&springs, &x, &mut blocks);
+        let u: Vec<DVec2> = (0..n)
+            .map(|i| DVec2::new((i % 13) as f64, -((i % 7) as f64)))
+            .collect();
+        let mut serial = vec![DVec2::ZERO; n as usize];
+        super::apply(&mut serial, &u, &blocks);
+        let threads = Threads::new(2).unwrap();
+        let (mut buffers, mut threaded_blocks) = (SpringBuffers::default(), vec![]);
+        super::blocks_threaded(&threads, &springs, &x, &mut threaded_blocks);
+        assert_eq!(threaded_blocks, blocks);
+        let mut threaded = vec![DVec2::splat(f64::NAN); n as usize]; // overwritten, not added to
+        super::apply_threaded(&threads, &mut buffers, &mut threaded, &u, &blocks);
+        assert_round_off(&serial, &threaded, "K u, 2 threads");
+    }
 }

@@ -39,8 +39,8 @@
 //! the pass after the step into their velocity.
 
 use super::obstacle::{SLOP, Surface, respond};
-use super::parallel::Threads;
-use super::state::State;
+use crate::solver::state::State;
+use crate::solver::threads::Threads;
 use glam::DVec2;
 
 /// Position iterations per step at most (a pile at dt = 1/60 s needs a few; at dt = 1e-4 s the

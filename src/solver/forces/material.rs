@@ -17,8 +17,8 @@
 //!   [`Materials::yield_springs`]), which every method reads.
 
 use super::spring::MIN_SPRING_LENGTH;
-use super::state::PackedSpring;
 use super::stiffness::{Block, Sym2};
+use crate::solver::packed::PackedSpring;
 use glam::DVec2;
 use std::f64::consts::TAU;
 

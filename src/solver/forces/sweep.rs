@@ -41,7 +41,7 @@ impl Contact {
 
     /// The contact rule on one particle: a free one whose tested height is below the ground is
     /// put on it and its vertical velocity zeroed (what the ground pass,
-    /// [`super::step::ground`], and the particle sweep both do).
+    /// [`crate::solver::step::ground`], and the particle sweep both do).
     #[inline(always)]
     pub fn apply(self, x: &mut DVec2, v: &mut DVec2, w: f64, ground: f64) {
         if w != 0.0 && self.height(*x, *v) < ground {
@@ -51,7 +51,7 @@ impl Contact {
     }
 }
 
-/// How the particle sweep moves a particle (see [`super::step::sweep`]).
+/// How the particle sweep moves a particle (see [`crate::solver::step::sweep`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Motion {
     /// Explicit Euler: the kick v += dt f/m, and the position update with the velocity from

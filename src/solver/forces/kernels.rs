@@ -1,12 +1,12 @@
 //! The step's kernels: plain loops over the packed arrays.
 //!
-//! Each function is one pass of the step, or a piece of one; [`super::step`] calls them in
+//! Each function is one pass of the step, or a piece of one; [`crate::solver::step`] calls them in
 //! order. Where the CPU has AVX they hand the spring pass and the particle sweep to
 //! [`super::wide`]'s forms, which give the same bits.
 
 use super::spring::scatter_pairs;
-use super::state::PackedSpring;
 use super::sweep::{Contact, Motion, Sweep, SweepArrays, finite_probe, sweep_portable};
+use crate::solver::packed::PackedSpring;
 use glam::DVec2;
 
 pub use super::spring::spring_force;

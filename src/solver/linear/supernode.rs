@@ -578,7 +578,7 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx_kernels_give_the_portable_bits() {
-        if !super::super::wide::available() {
+        if !crate::solver::threads::machine::avx() {
             return;
         }
         check::<f32>();

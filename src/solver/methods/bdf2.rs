@@ -28,9 +28,9 @@
 //! The ground clamps the end positions inside the step (as XPBD's substeps do): a free
 //! particle whose x₁ is under it is put on it and loses its downward velocity.
 
-use super::parallel::Threads;
 use super::projective::{Projective, Target};
-use super::state::State;
+use crate::solver::state::State;
+use crate::solver::threads::Threads;
 use glam::DVec2;
 
 /// The factors, the history and the counters, kept from step to step.

@@ -26,7 +26,7 @@
 //!   loaded: a solve of the 256² cloth's factor took about a quarter less time than with f32
 //!   values and f64 arithmetic. Projective dynamics solves for the correction of its iterate
 //!   from a residual it computes in f64, so the rounding (a solve is then good to about 1e-6)
-//!   leaves its fixed point exactly where it was ([`super::projective`]). A matrix whose
+//!   leaves its fixed point exactly where it was ([`crate::solver::methods::projective`]). A matrix whose
 //!   condition number may be too large for that keeps its values, and the arithmetic, in f64,
 //!   through the same kernels;
 //! * the substitutions walk the values in address order, but in blocks of a few hundred
@@ -35,8 +35,8 @@
 //! The lane order is fixed, so the result is the same bits on every CPU and thread count.
 
 use super::etree::TreeSplit;
-use super::parallel::Threads;
 use super::supernode::{Block, Real, invert};
+use crate::solver::threads::Threads;
 use faer::perm::Perm;
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 use rayon::prelude::*;
@@ -172,7 +172,7 @@ impl Factor {
     /// the bytes and compute in f32. (Projective dynamics solves for the
     /// correction to its iterate, whose residual it computes in f64, so the rounding slows its
     /// convergence by a little and leaves its fixed point where it was: see
-    /// [`super::projective`].)
+    /// [`crate::solver::methods::projective`].)
     pub fn finish(&mut self, single: bool, threads: &Threads, springs: usize) {
         // Each supernode's block, apart, to invert on the pool's threads.
         let n = self.supernodes();
@@ -323,7 +323,7 @@ impl Factor {
         shared: Option<(&TreeSplit, &mut Below<T>)>,
     ) {
         #[cfg(target_arch = "x86_64")]
-        if super::wide::available() {
+        if crate::solver::threads::machine::avx() {
             // SAFETY: the CPU has AVX.
             unsafe { self.forward_avx::<T>(supernodes, span, below, shared) };
             return;
@@ -357,7 +357,7 @@ impl Factor {
         shared: Option<(&TreeSplit, &Below<T>)>,
     ) {
         #[cfg(target_arch = "x86_64")]
-        if super::wide::available() {
+        if crate::solver::threads::machine::avx() {
             // SAFETY: the CPU has AVX.
             unsafe { self.backward_avx::<T>(supernodes, span, below, shared) };
             return;
@@ -638,8 +638,8 @@ mod tests {
             .map(|r| glam::DVec2::new((r % w) as f64, (r / w) as f64))
             .collect();
         let (start, neighbours) =
-            crate::solver::ordering::adjacency(n, t.iter().map(|e| (e.row, e.col)));
-        crate::solver::ordering::nested_dissection(&position, &start, &neighbours)
+            crate::solver::linear::ordering::adjacency(n, t.iter().map(|e| (e.row, e.col)));
+        crate::solver::linear::ordering::nested_dissection(&position, &start, &neighbours)
             .into_iter()
             .map(|r| r as usize)
             .collect()
@@ -726,7 +726,7 @@ mod tests {
         });
         let mut line = format!(
             "{}: factor of {} values ({:.1} MB); one read {read:.2} ms",
-            crate::bench::machine(),
+            crate::solver::threads::machine(),
             f.len(),
             f.len() as f64 * 4e-6
         );
@@ -811,7 +811,7 @@ mod tests {
 
     /// A torn cloth's dissection still gives two halves to run at once: with springs missing,
     /// a leaf set of the dissection can hold pieces with no spring between them, whose
-    /// columns interleave unless the order is postordered ([`super::super::ordering::postorder`]).
+    /// columns interleave unless the order is postordered ([`crate::solver::linear::ordering::postorder`]).
     /// (Without it, this grid, a third of its springs cut, and nearly every other torn grid
     /// tried, 32² to 64² with a seventh to a half cut, had no split.)
     #[test]

@@ -37,12 +37,12 @@
 //!
 //! Nothing is factorised: the colouring (linear in the springs) is all a change of the spring
 //! graph or the pins costs. Threads: the pool's threads work through each colour's vertices in
-//! shares as one team ([`super::team`]), meeting at a barrier after each colour, so the sweep is
+//! shares as one team ([`crate::solver::threads::team`]), meeting at a barrier after each colour, so the sweep is
 //! the one-thread sweep bit for bit.
 
-use super::parallel::Threads;
-use super::state::State;
-use super::team::Shared;
+use crate::solver::state::State;
+use crate::solver::threads::Threads;
+use crate::solver::threads::team::Shared;
 use glam::DVec2;
 
 /// The colouring, the adjacency and the buffers, kept from step to step.

@@ -16,18 +16,18 @@
 //! Verlet and RK4.
 //!
 //! Threads: the constraint graph is coloured greedily (no two springs of a colour share a
-//! particle), and the pool's threads, as one team ([`super::team`]), project each colour's
+//! particle), and the pool's threads, as one team ([`crate::solver::threads::team`]), project each colour's
 //! springs in shares, meeting at a barrier after every colour: at 64² a colour is a few
 //! microseconds of work, too little to pay for a fork and a join. The sweep is then the
 //! same Gauss-Seidel sweep whatever the thread count: the result is bit for bit that of one
 //! thread. (Jacobi with averaging would need no colouring, but it converges more slowly, by a
 //! factor that grows with the number of constraints on a particle.)
 
-use super::method::Iterations;
-use super::pairs::Pairs;
-use super::parallel::Threads;
-use super::state::State;
-use super::team::Shared;
+use crate::solver::contact::pairs::Pairs;
+use crate::solver::method::Iterations;
+use crate::solver::state::State;
+use crate::solver::threads::Threads;
+use crate::solver::threads::team::Shared;
 use glam::DVec2;
 
 /// A constraint in colour order: the packed spring's ends and rest length, and the projection's
@@ -331,7 +331,7 @@ fn project_one(c: &Constraint, x: Positions, mut g: impl FnMut(f64) -> f64) {
 /// time with AVX where the CPU has it (bit for bit the same result).
 fn project(constraints: &[Constraint], x: Positions) {
     #[cfg(target_arch = "x86_64")]
-    if super::wide::available() {
+    if crate::solver::forces::wide::available() {
         // SAFETY: AVX is available; the positions' safety is the colour's (see `Positions`).
         unsafe { project_avx(constraints, x) };
         return;
@@ -382,7 +382,7 @@ unsafe fn project_avx(constraints: &[Constraint], x: Positions) {
     project_scalar(tail, x);
 }
 
-/// Four constraints' projected ends, two to a register (see [`super::wide::Quad`]), and which
+/// Four constraints' projected ends, two to a register (see [`crate::solver::forces::wide::Quad`]), and which
 /// of them have no length and stay.
 #[cfg(target_arch = "x86_64")]
 struct Moved {
@@ -402,7 +402,7 @@ impl Moved {
     /// inlined, it inherits AVX from its caller.
     #[inline(always)]
     unsafe fn of(c: &[Constraint], x: Positions) -> Moved {
-        use super::wide::{Quad, lanes, spring_order};
+        use crate::solver::forces::wide::{Quad, lanes, spring_order};
         use std::arch::x86_64::*;
         // SAFETY: the caller's.
         unsafe {
@@ -796,7 +796,7 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn the_avx_sweep_is_the_scalar_sweep() {
-        if !super::super::wide::available() {
+        if !crate::solver::forces::wide::available() {
             return;
         }
         let h =

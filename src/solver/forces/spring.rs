@@ -3,7 +3,7 @@
 //! [`super::wide`]), the stiffness product ([`super::stiffness`]) and projective dynamics'
 //! local step share.
 
-use super::state::PackedSpring;
+use crate::solver::packed::PackedSpring;
 use glam::DVec2;
 
 /// Springs shorter than this exert no force: their direction is undefined.

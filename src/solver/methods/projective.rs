@@ -12,14 +12,14 @@
 //!   Laplacian. The matrix depends only on masses, stiffnesses, the spring graph, the pins and
 //!   h, so it is factored once (faer's sparse Cholesky, in the cheaper for the substitutions of
 //!   two orders: faer's minimum degree, and nested dissection from the particles' positions,
-//!   [`super::ordering`]) and every iteration costs one forward and one backward substitution,
+//!   [`crate::solver::linear::ordering`]) and every iteration costs one forward and one backward substitution,
 //!   for x and y together (an n × 2 right-hand side: the factor is read once per iteration).
 //!
 //! The global step is solved for the correction: x ← x + Ã⁻¹ r with the residual
 //! r = M y + h² J d − (M + h² L) x = M (y − x) + Σ_s h² k_s (d_s − (x_a − x_b)), one pair pass
 //! in f64. With the exact inverse this is the textbook update (x + A⁻¹(b − A x) = A⁻¹ b); the
 //! factor's values are stored in f32 and the solve computes in f32, which halves what each
-//! iteration reads and doubles the lanes of its arithmetic ([`super::cholesky`]), and in this
+//! iteration reads and doubles the lanes of its arithmetic ([`crate::solver::linear::cholesky`]), and in this
 //! form that rounding costs only a little of each iteration's progress: the fixed point, r = 0,
 //! is Φ's minimiser in f64 whatever Ã is.
 //!
@@ -32,13 +32,13 @@
 //! with v1 = (x1 − x0)/h; damping, ground contact and the position update follow as for
 //! implicit Euler.
 
-use super::cholesky::{Factor, Stored, Substitution, permutation};
-use super::ordering::{adjacency, nested_dissection};
-use super::parallel::{PairPass, SpringBuffers, Threads, scatter_from};
-use super::spring::{projection_residual, scatter_pairs};
-use super::state::{PackedSpring, State};
+use crate::solver::forces::spring::{projection_residual, scatter_pairs};
 #[cfg(target_arch = "x86_64")]
-use super::wide;
+use crate::solver::forces::wide;
+use crate::solver::linear::cholesky::{Factor, Stored, Substitution, permutation};
+use crate::solver::linear::ordering::{adjacency, nested_dissection};
+use crate::solver::state::{PackedSpring, State};
+use crate::solver::threads::{PairPass, SpringBuffers, Threads, scatter_from};
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::SupernodalThreshold;
@@ -330,7 +330,7 @@ impl Projective {
 
     /// The symbolic factorisation of `matrix` (M + h² L over the free particles) in the cheaper
     /// of two orders for the substitutions: faer's approximate minimum degree, and nested
-    /// dissection from the particles' positions ([`super::ordering`]), tried on systems of
+    /// dissection from the particles' positions ([`crate::solver::linear::ordering`]), tried on systems of
     /// [`DISSECTION_MIN_ROWS`] rows or more.
     fn symbolic(
         &self,
@@ -492,7 +492,7 @@ fn solve_cost(symbolic: &SymbolicCholesky<usize>) -> usize {
 /// The factorisation may share the pool on a big scene (it runs once); the substitutions run on
 /// the calling thread.
 fn parallelism(threads: &Threads, springs: usize) -> Par {
-    if threads.threads() > 1 && springs >= super::parallel::PARALLEL_MIN_SPRINGS {
+    if threads.threads() > 1 && springs >= crate::solver::threads::PARALLEL_MIN_SPRINGS {
         Par::rayon(threads.threads())
     } else {
         Par::Seq

@@ -14,8 +14,8 @@
 //! position moves only back toward the surface, by at most the step's own travel into it.
 
 use super::obstacle::{Placed, SLOP, Surface, respond};
-use super::parallel::Threads;
-use super::sweep::Motion;
+use crate::solver::forces::sweep::Motion;
+use crate::solver::threads::Threads;
 use glam::DVec2;
 
 /// Contact settings: the particles' radius, and the surfaces' friction and restitution, at

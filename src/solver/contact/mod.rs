@@ -1,0 +1,14 @@
+//! Contact: the geometry of obstacles, their distance and a swept test against tunnelling,
+//! and one particle's response with friction and restitution ([`obstacle`]); the contact pass
+//! that the step runs after the position update ([`collide`]); and contact between particles,
+//! with their neighbour lists ([`pairs`]).
+//!
+//! It reads the state (`solver::state`), the sweep's motion (`solver::forces`) and the threads;
+//! the methods above call it (XPBD pushes pairs apart inside its substeps) and the step runs
+//! its pass.
+
+pub mod obstacle;
+pub mod pairs;
+mod pass;
+
+pub use pass::{ContactSettings, Surroundings, collide, moves_with_drift};
