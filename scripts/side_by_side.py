@@ -12,6 +12,7 @@ three timed runs (its --repeat 3), so hooke's is the best of three runs too (--h
     ../shared/peer/setup.sh                      # the peers' Python environment, once
     scripts/side_by_side.py --rounds 8           # hooke and Taichi at 1 and 2 threads
     scripts/side_by_side.py --rounds 3 --all     # also Warp (CPU) and NumPy, 1 thread
+    scripts/side_by_side.py --baseline OLD --no-peers   # this build against another, alone
 
 Standard library only. Exits 2 with a message when a contender cannot be run.
 """
@@ -36,6 +37,10 @@ def parse_args():
     p.add_argument("--peer", default=os.path.join(ROOT, "..", "shared", "peer"),
                    help="the peer directory, with its .venv (default ../shared/peer)")
     p.add_argument("--all", action="store_true", help="also Warp and NumPy (one thread each)")
+    p.add_argument("--baseline", help="another hooke binary (an earlier commit's), measured in "
+                   "the same alternating rounds")
+    p.add_argument("--no-peers", action="store_true",
+                   help="hooke (and the baseline) alone, without the peer environment")
     p.add_argument("--hooke-repeat", type=int, default=3,
                    help="hooke runs per round, the best kept: the Taichi peer's own protocol "
                         "(bench_taichi.py --repeat, default 3); 1 for a single run (default 3)")
@@ -86,7 +91,9 @@ def main():
     python = os.path.join(a.peer, ".venv", "bin", "python")
     if not os.access(a.hooke, os.X_OK):
         fail(f"no hooke binary at {a.hooke}: run `cargo build --release` first")
-    if not os.access(python, os.X_OK):
+    if a.baseline and not os.access(a.baseline, os.X_OK):
+        fail(f"no baseline binary at {a.baseline}")
+    if not a.no_peers and not os.access(python, os.X_OK):
         fail(f"no peer environment at {python}: run {os.path.join(a.peer, 'setup.sh')} first")
     scene = os.path.join(ROOT, "assets", "scenes", "bench", "cloth256.ron")
     peer = lambda script, steps, t: [python, os.path.join(a.peer, script), "--size", "256", "256",
@@ -94,10 +101,13 @@ def main():
     # (name, threads, command, runs per round: the best is kept)
     contenders = []
     for t in a.threads:
-        contenders.append((f"hooke", t, [a.hooke, "run", "--scene", scene, "--steps", "600",
-                                         "--threads", str(t), "--json"], a.hooke_repeat))
-        contenders.append(("taichi-gather", t, peer("bench_taichi.py", 575, t), 1))
-    if a.all:
+        run = ["run", "--scene", scene, "--steps", "600", "--threads", str(t), "--json"]
+        contenders.append(("hooke", t, [a.hooke] + run, a.hooke_repeat))
+        if a.baseline:
+            contenders.append(("hooke-baseline", t, [a.baseline] + run, a.hooke_repeat))
+        if not a.no_peers:
+            contenders.append(("taichi-gather", t, peer("bench_taichi.py", 575, t), 1))
+    if a.all and not a.no_peers:
         contenders.append(("warp-cpu", 1, peer("bench_warp.py", 300, 1), 1))
         contenders.append(("numpy", 1, peer("bench_numpy.py", 40, 1), 1))
     results = {(name, t): [] for name, t, _, _ in contenders}
@@ -107,9 +117,10 @@ def main():
             results[(name, t)].append(best / 1e6)
         print(f"round {r + 1}/{a.rounds} done", file=sys.stderr)
     print(f"on {machine()}")
+    peers = "" if a.no_peers else " and of Taichi's 3 timed runs"
     print("M spring updates/s, 256x256 cloth, f64, symplectic Euler; range (median) over "
           f"{a.rounds} alternating rounds; a round's figure is the best of hooke's "
-          f"{a.hooke_repeat} run(s) and of Taichi's 3 timed runs")
+          f"{a.hooke_repeat} run(s){peers}")
     print(f"{'implementation':15s} {'threads':>7s} {'min':>7s} {'median':>7s} {'max':>7s}")
     for (name, t), v in results.items():
         print(f"{name:15s} {t:7d} {min(v):7.1f} {statistics.median(v):7.1f} {max(v):7.1f}")
