@@ -155,6 +155,9 @@ pub struct RunReport {
     pub energy_start: f64,
     /// Total energy at the end, J.
     pub energy_end: f64,
+    /// The largest total energy at the end of any step, J (the start's when no step was
+    /// taken): above `energy_start`, the run gained energy somewhere.
+    pub energy_max: f64,
     /// dt · ω_max at the start (power-iteration estimate of the fastest mode).
     pub h_omega_max: f64,
     /// The largest stable dt for this scene and integrator; `null` when unconditional.
@@ -303,9 +306,12 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
     let energy_start = world.resource::<Solver>().energy(params.gravity).total();
     let stability = sim::stability::estimate(world.resource::<Solver>(), &params);
 
+    world.insert_resource(sim::watch::EnergyPeak::default());
     let start = Instant::now();
     let taken = sim::advance(world, steps);
-    let wall_s = start.elapsed().as_secs_f64();
+    // The step's own time: the energy peak's evaluations are kept apart.
+    let peak = *world.resource::<sim::watch::EnergyPeak>();
+    let wall_s = (start.elapsed().as_secs_f64() - peak.seconds).max(0.0);
 
     let solver = world.resource::<Solver>();
     let solve = solver.solve_stats();
@@ -336,6 +342,7 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
         spring_updates_per_s: (springs as f64 * taken as f64) / wall_s.max(1e-12),
         energy_start,
         energy_end,
+        energy_max: peak.max.unwrap_or(energy_start).max(energy_start),
         h_omega_max: stability.h_omega,
         stable_dt: stability
             .stable_dt

@@ -347,6 +347,9 @@ impl Plugin for SimPlugin {
                     yield_springs
                         .run_if(scene_has_plastic_springs)
                         .in_set(StepSystems::Yield),
+                    super::watch::track_energy_peak
+                        .run_if(resource_exists::<super::watch::EnergyPeak>)
+                        .after(StepSystems::Yield),
                 ));
         });
     }
@@ -488,6 +491,7 @@ fn yield_springs(mut solver: ResMut<Solver>, params: Res<SimParams>, mut n: ResM
 fn integrate(
     mut solver: ResMut<Solver>,
     params: Res<SimParams>,
+    obstacles: Res<super::obstacles::Obstacles>,
     settings: Res<CgSettings>,
     threads: Res<SolverThreads>,
     mut n: ResMut<PassCounts>,
@@ -510,7 +514,8 @@ fn integrate(
         // Projective dynamics and XPBD take the materials' forces inside their solves.
         n.materials += s.state.materials().exerts_forces() as u64;
     }
-    if let Err(e) = step::integrate(&mut s.state, &mut s.work, &method, &threads) {
+    let around = surroundings(&params, &obstacles);
+    if let Err(e) = step::integrate(&mut s.state, &mut s.work, &method, Some(&around), &threads) {
         // Only when memory runs out: with m > 0 and k >= 0 (checked) projective dynamics'
         // M + h²L is positive definite. The step is refused like a blow-up, which pauses with
         // the last good state.

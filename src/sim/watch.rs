@@ -37,6 +37,36 @@ pub const KEEP_EVERY: u64 = 12;
 /// How many interval states are kept.
 pub const KEPT: usize = 8;
 
+/// Present = the largest total energy at the end of any step is kept (`hooke run` reports it
+/// as `energy_max`, so that an energy gain shows without a plot). Costs an energy evaluation a
+/// step, a pass over the particles and the springs; its time is kept apart, so that a run's
+/// throughput is the step's own.
+///
+/// ```
+/// # use hooke::sim::watch::EnergyPeak;
+/// let mut app = hooke::headless_app();
+/// app.init_resource::<EnergyPeak>();
+/// ```
+#[derive(Resource, Debug, Default, Clone, Copy)]
+pub struct EnergyPeak {
+    /// The largest total energy at the end of a step so far, J (`None` before the first).
+    pub max: Option<f64>,
+    /// Wall time spent evaluating it, s.
+    pub seconds: f64,
+}
+
+/// After every step, with [`EnergyPeak`] present: its total energy against the peak.
+pub(crate) fn track_energy_peak(
+    solver: Res<Solver>,
+    params: Res<SimParams>,
+    mut peak: ResMut<EnergyPeak>,
+) {
+    let clock = std::time::Instant::now();
+    let e = solver.energy(params.gravity).total();
+    peak.max = Some(peak.max.map_or(e, |m| m.max(e)));
+    peak.seconds += clock.elapsed().as_secs_f64();
+}
+
 /// Present = the watch is on (the app turns it on; headless runs report energies instead).
 ///
 /// ```

@@ -55,6 +55,7 @@
 //! Every function here takes the packed [`State`], the per-method buffers ([`Workspace`]) and
 //! the thread pool ([`Threads`]); none knows who owns the particles.
 
+use super::contact::inside::InSolve;
 use super::contact::pairs::{PairReport, Pairs};
 use super::contact::{self, Surroundings};
 use super::forces::kernels;
@@ -83,6 +84,10 @@ pub struct Workspace {
     pub(crate) bdf2: Bdf2,
     pub(crate) vbd: Vbd,
     pub(crate) pairs: Pairs,
+    /// Each particle's velocity before contact in the last step whose solve kept contact
+    /// (its start velocity plus a step of its forces' acceleration), for the restitution
+    /// after it; empty when the last step's solve did not.
+    pub(crate) pre_contact: Vec<DVec2>,
 }
 
 impl Workspace {
@@ -98,6 +103,7 @@ impl Workspace {
             vbd: std::mem::take(&mut self.vbd).repacked(),
             // The lists name particles by index, which the repacking changed.
             pairs: Pairs::default(),
+            pre_contact: Vec::new(),
         }
     }
 
@@ -295,15 +301,36 @@ pub struct Method {
 }
 
 /// Pass 2: the integrator's update (the Euler methods' [`kick`], or the method's solve).
-/// Fails only when projective dynamics cannot factor its matrix (memory ran out).
+/// The large-step methods keep their iterate out of `around`'s surfaces and, when the settings
+/// ask, out of the other particles inside their solves (`contact/inside.rs`); the explicit methods
+/// leave contact to pass 6. Fails only when projective dynamics cannot factor its matrix
+/// (memory ran out).
 pub fn integrate(
     s: &mut State,
     w: &mut Workspace,
     m: &Method,
+    around: Option<&Surroundings>,
     threads: &Threads,
 ) -> Result<(), String> {
     let (dt, g, it) = (m.dt, m.gravity, m.iterations);
     let drag = m.drag;
+    let around = around.filter(|a| a.active() && m.integrator.unconditionally_stable());
+    if let Some(r) = around.and(m.pair_radius) {
+        // The pair lists, with a skin that covers how far two particles can close in the
+        // step: the strongest body-force acceleration and the fastest particle.
+        let accel = (s.f.iter().zip(&s.inv_mass)).fold(0.0f64, |m, (f, w)| m.max(f.length() * w));
+        w.pairs.ready_for_step(s, r, dt, accel, threads);
+    }
+    // Where each particle heads before contact: the side of a thin segment it belongs on,
+    // and the approach that restitution keeps a share of after the step.
+    w.pre_contact.clear();
+    if around.is_some() {
+        let data = (&s.v[..], &s.f[..], &s.inv_mass[..]);
+        w.pre_contact
+            .extend((0..s.x.len()).map(|i| data.0[i] + data.1[i] * (data.2[i] * dt)));
+    }
+    let contact = around.and_then(|a| InSolve::new(a, Some(&w.pairs), &w.pre_contact, dt));
+    let contact = contact.as_ref();
     match m.integrator {
         Integrator::ExplicitEuler | Integrator::SymplecticEuler => {
             kick(s, m.integrator, dt, threads)
@@ -311,23 +338,24 @@ pub fn integrate(
         Integrator::VelocityVerlet => velocity_verlet(s, &mut w.scratch, dt, g, threads),
         Integrator::Rk4 => rk4(s, &mut w.scratch, dt, g, threads),
         Integrator::ImplicitEuler => {
-            implicit_euler(s, &mut w.scratch, dt, m.cg, it.newton, g, threads)
+            implicit_euler(s, &mut w.scratch, dt, m.cg, it.newton, g, contact, threads)
         }
         Integrator::ProjectiveDynamics => {
-            projective::step(s, &mut w.projective, dt, drag, it.projective, threads)?
+            let pd = &mut w.projective;
+            projective::step(s, pd, dt, drag, it.projective, contact, threads)?
         }
-        Integrator::Xpbd => {
-            let pairs = m.pair_radius.map(|r| (&mut w.pairs, r));
-            xpbd::step(s, &mut w.xpbd, dt, &it, m.ground, pairs, threads)
+        Integrator::Xpbd => xpbd::step(s, &mut w.xpbd, dt, &it, m.ground, contact, threads),
+        Integrator::Bdf2 => {
+            let b = &mut w.bdf2;
+            bdf2::step(s, b, dt, drag, it.bdf2, m.ground, contact, threads)?
         }
-        Integrator::Bdf2 => bdf2::step(s, &mut w.bdf2, dt, drag, it.bdf2, m.ground, threads)?,
         Integrator::Vbd => {
             let settings = vbd::Settings {
                 iterations: it.vbd,
                 drag,
                 chebyshev: it.vbd_chebyshev,
             };
-            vbd::step(s, &mut w.vbd, dt, settings, threads)
+            vbd::step(s, &mut w.vbd, dt, settings, contact, threads)
         }
     }
     Ok(())
@@ -409,17 +437,33 @@ pub fn collide(
     let drift = contact::moves_with_drift(motion(integrator));
     let u = drift.then_some(&s.drift[..]);
     let springs = s.springs.len();
-    let surfaces = contact::collide(
-        &mut s.x,
-        &mut s.v,
-        u,
-        &s.inv_mass,
-        dt,
-        gravity,
-        around,
-        threads,
-        springs,
-    );
+    let surfaces = if w.pre_contact.len() == s.x.len() {
+        // The solve kept the particles out of the surfaces: the velocities' response alone.
+        let pre = &w.pre_contact;
+        contact::settle(
+            &s.x,
+            &mut s.v,
+            pre,
+            &s.inv_mass,
+            dt,
+            gravity,
+            around,
+            threads,
+            springs,
+        )
+    } else {
+        contact::collide(
+            &mut s.x,
+            &mut s.v,
+            u,
+            &s.inv_mass,
+            dt,
+            gravity,
+            around,
+            threads,
+            springs,
+        )
+    };
     Contacts {
         surfaces,
         pairs: pairs.contacts,

@@ -1,14 +1,16 @@
 //! Contact: the geometry of obstacles, their distance and a swept test against tunnelling,
 //! and one particle's response with friction and restitution ([`obstacle`]); the contact pass
-//! that the step runs after the position update ([`collide`]); and contact between particles,
-//! with their neighbour lists ([`pairs`]).
+//! that the step runs after the position update ([`collide`]), or only its velocities after a
+//! solve that kept contact itself ([`settle`]); contact between particles, with their neighbour
+//! lists ([`pairs`]); and contact inside the large-step methods' solves (`inside`).
 //!
 //! It reads the state (`solver::state`), the sweep's motion (`solver::forces`) and the threads;
 //! the methods above call it (XPBD pushes pairs apart inside its substeps) and the step runs
 //! its pass.
 
+pub(crate) mod inside;
 pub mod obstacle;
 pub mod pairs;
 mod pass;
 
-pub use pass::{ContactSettings, Surroundings, collide, moves_with_drift};
+pub use pass::{ContactSettings, Surroundings, collide, moves_with_drift, settle};

@@ -155,55 +155,19 @@ pub fn collide(
         if w == 0.0 {
             return 0;
         }
-        let mut contacts = 0;
-        // Where the step began; a path that crosses into an obstacle stops where it first
-        // touches and slides on along the surface for the rest of the step.
+        // Where the step began, and where the particle was going (its velocity, for a step
+        // that did not move it).
         let from = *x - u * dt;
-        // Where the particle was going (its velocity, for a step that did not move it): a
-        // particle on a thin segment's line belongs on the side it is not heading to.
         let heading = if *x != from { *x - from } else { *v };
-        // Only the obstacles the path comes near (a test of the distance to each one's centre:
-        // most particles of a big cloth are far from every obstacle).
-        let travel = (*x - from).length();
-        let near = |o: &Placed, x: DVec2| {
-            (x - o.pose.center).length() <= o.bound() + r + travel + 2.0 * SLOP
-        };
-        let first = obstacles
-            .iter()
-            .enumerate()
-            .filter(|(_, o)| near(o, *x))
-            .filter_map(|(i, o)| o.first_hit(from, *x, r).map(|t| (t, i)))
-            .min_by(|a, b| a.0.total_cmp(&b.0));
-        if let Some((t, i)) = first {
-            let o = &obstacles[i];
-            let step = *x - from;
-            let hit = from + step * t;
-            let n = o.hit_normal(hit, heading);
-            let rest = step * (1.0 - t);
-            let into = (-rest.dot(n)).max(0.0);
-            *x = hit + rest + n * into;
-            grip(x, v, from, n, into, o.velocity_at(*x));
-            contacts += 1;
-        }
-        for o in obstacles {
-            if !near(o, *x) {
-                continue;
-            }
-            if let Some(touch) = o.touch(*x, from, heading, r) {
-                *x += touch.normal * touch.depth;
-                grip(x, v, from, touch.normal, touch.depth, o.velocity_at(*x));
-                contacts += 1;
-            }
-        }
-        if let Some(g) = ground
-            && x.y < g + r + SLOP
-        {
-            let depth = (g + r - x.y).max(0.0);
-            x.y = x.y.max(g + r);
-            grip(x, v, from, DVec2::Y, depth, DVec2::ZERO);
-            contacts += 1;
-        }
-        contacts
+        place(
+            x,
+            from,
+            heading,
+            obstacles,
+            r,
+            ground,
+            |x, n, depth, surface_velocity| grip(x, v, from, n, depth, surface_velocity),
+        )
     };
     // The path's velocity: the drift's, or the end velocity itself (read before it changes).
     let part = |x: &mut [DVec2], v: &mut [DVec2], u: Option<&[DVec2]>, w: &[f64]| {
@@ -230,12 +194,157 @@ pub fn collide(
     }
 }
 
+/// The velocity pass after a step whose solve kept contact itself (`contact/inside.rs`): the
+/// particles are already out of every surface, on their own sides, with friction's hold in
+/// their positions, so nothing is placed again (a path re-read after the solve can start on a
+/// thin segment's line and pick the wrong side). A free particle that ends touching a surface
+/// keeps no approach in its end velocity, and bounces with the restitution's share of the
+/// approach it had before contact, `pre` (its start velocity plus a step of its body
+/// forces' acceleration), above the rest speed. Returns the contacts.
+#[allow(clippy::too_many_arguments)]
+pub fn settle(
+    x: &[DVec2],
+    v: &mut [DVec2],
+    pre: &[DVec2],
+    w: &[f64],
+    dt: f64,
+    gravity: DVec2,
+    around: &Surroundings,
+    threads: &Threads,
+    springs: usize,
+) -> usize {
+    let (r, ground, surface) = (
+        around.radius(),
+        around.ground(),
+        around.surface(dt, gravity),
+    );
+    let obstacles = around.obstacles;
+    let one = |x: DVec2, v: &mut DVec2, pre: DVec2, w: f64| -> usize {
+        if w == 0.0 {
+            return 0;
+        }
+        let mut contacts = 0;
+        let mut touching = |n: DVec2, surface_velocity: DVec2| {
+            let (end, before) = (
+                (*v - surface_velocity).dot(n),
+                (pre - surface_velocity).dot(n),
+            );
+            let bounce = if -before > surface.rest_speed {
+                -before * surface.restitution
+            } else {
+                0.0
+            };
+            // A particle that came in leaves with the restitution's share of its approach
+            // alone, whatever velocity the solve's own formula gave it (BDF2's, from its
+            // history, sent a particle that landed up at half its speed); one that was leaving
+            // keeps going.
+            let normal = if before < 0.0 { bounce } else { end.max(0.0) };
+            *v += n * (normal - end);
+            contacts += 1;
+        };
+        for o in obstacles {
+            if (x - o.pose.center).length() > o.bound() + r + 2.0 * SLOP {
+                continue;
+            }
+            let (d, n) = o.distance(x);
+            if d < r + SLOP {
+                touching(n, o.velocity_at(x));
+            }
+        }
+        if let Some(g) = ground
+            && x.y < g + r + SLOP
+        {
+            touching(DVec2::Y, DVec2::ZERO);
+        }
+        contacts
+    };
+    threads.chunked(
+        springs,
+        (x, &mut v[..], pre, w),
+        |(x, v, pre, w)| {
+            let mut n = 0;
+            for i in 0..x.len() {
+                n += one(x[i], &mut v[i], pre[i], w[i]);
+            }
+            n
+        },
+        |a, b| a + b,
+    )
+}
+
+/// Puts a particle that moved from `from` to `x` (heading `heading`) back out of the obstacles
+/// and the ground (`ground`: its height when this pass handles it) by the radius `r`, and calls
+/// `touched(x, normal, depth, surface_velocity)` for each surface it was put on. A path that
+/// crosses into an obstacle stops where it first touches and slides on along the surface for
+/// the rest of its travel, so that no step, however large, carries a particle through a thin
+/// one. Returns the contacts. The contact pass and the large-step methods' solves
+/// ([`super::inside`]) both place particles with it.
+pub(crate) fn place(
+    x: &mut DVec2,
+    from: DVec2,
+    heading: DVec2,
+    obstacles: &[Placed],
+    r: f64,
+    ground: Option<f64>,
+    mut touched: impl FnMut(&mut DVec2, DVec2, f64, DVec2),
+) -> usize {
+    let mut contacts = 0;
+    // Only the obstacles the path comes near (a test of the distance to each one's centre:
+    // most particles of a big cloth are far from every obstacle).
+    let travel = (*x - from).length();
+    let near =
+        |o: &Placed, x: DVec2| (x - o.pose.center).length() <= o.bound() + r + travel + 2.0 * SLOP;
+    let first = obstacles
+        .iter()
+        .enumerate()
+        .filter(|(_, o)| near(o, *x))
+        .filter_map(|(i, o)| o.first_hit(from, *x, r).map(|t| (t, i)))
+        .min_by(|a, b| a.0.total_cmp(&b.0));
+    if let Some((t, i)) = first {
+        let o = &obstacles[i];
+        let step = *x - from;
+        let hit = from + step * t;
+        let n = o.hit_normal(hit, heading);
+        let rest = step * (1.0 - t);
+        let into = (-rest.dot(n)).max(0.0);
+        *x = hit + rest + n * into;
+        touched(x, n, into, o.velocity_at(*x));
+        contacts += 1;
+    }
+    for o in obstacles {
+        if !near(o, *x) {
+            continue;
+        }
+        if let Some(touch) = o.touch(*x, from, heading, r) {
+            *x += touch.normal * touch.depth;
+            touched(x, touch.normal, touch.depth, o.velocity_at(*x));
+            contacts += 1;
+        }
+    }
+    if let Some(g) = ground
+        && x.y < g + r + SLOP
+    {
+        let depth = (g + r - x.y).max(0.0);
+        x.y = x.y.max(g + r);
+        touched(x, DVec2::Y, depth, DVec2::ZERO);
+        contacts += 1;
+    }
+    contacts
+}
+
 /// Friction on the step's displacement: the particle's sliding over the step, relative to the
 /// surface (which moved by `surface_shift`), is taken back by at most μ times the depth the
 /// contact pushed it out by, all of it when that is enough (static friction). Without this a
 /// particle held by friction would still creep down a slope by g·sinθ·dt² a step: the
 /// velocity rule stops its motion, but only after the step has moved it.
-fn hold(x: &mut DVec2, from: DVec2, surface_shift: DVec2, n: DVec2, depth: f64, friction: f64) {
+pub(crate) fn hold(
+    x: &mut DVec2,
+    from: DVec2,
+    surface_shift: DVec2,
+    n: DVec2,
+    depth: f64,
+    friction: f64,
+) {
     let moved = *x - from - surface_shift;
     let sliding = moved - n * moved.dot(n);
     let (length, limit) = (sliding.length(), friction * depth);

@@ -29,6 +29,7 @@
 //! particle whose x₁ is under it is put on it and loses its downward velocity.
 
 use super::projective::{Projective, Target};
+use crate::solver::contact::inside::InSolve;
 use crate::solver::state::State;
 use crate::solver::threads::Threads;
 use glam::DVec2;
@@ -81,6 +82,7 @@ impl Bdf2 {
 
 /// One BDF2 step of `iterations` local/global iterations (see the module docs). `s.f` holds
 /// the body forces; `drag` is the air damping μ, 1/s.
+#[allow(clippy::too_many_arguments)]
 pub fn step(
     s: &mut State,
     b: &mut Bdf2,
@@ -88,6 +90,7 @@ pub fn step(
     drag: f64,
     iterations: u32,
     ground: Option<f64>,
+    contact: Option<&InSolve>,
     threads: &Threads,
 ) -> Result<(), String> {
     let n = s.x.len();
@@ -133,8 +136,8 @@ pub fn step(
             base: &b.xhat,
             velocity: &b.vhat,
         };
-        b.main.solve(s, &target, dt, iterations, threads)?;
-        (&b.main, target.h, &b.xhat[..])
+        b.main.solve(s, &target, dt, iterations, contact, threads)?;
+        (&b.main, target.h, &b.xhat[..], &b.vhat[..])
     } else {
         let target = Target {
             h: dt,
@@ -142,11 +145,15 @@ pub fn step(
             base: &s.x,
             velocity: &s.v,
         };
-        b.startup.solve(s, &target, dt, iterations, threads)?;
+        b.startup
+            .solve(s, &target, dt, iterations, contact, threads)?;
         b.startup_steps += 1;
-        (&b.startup, dt, &s.x[..])
+        // The velocity each particle came with, for the contact held ones below.
+        b.vhat.clear();
+        b.vhat.extend_from_slice(&s.v);
+        (&b.startup, dt, &s.x[..], &b.vhat[..])
     };
-    let (pd, h, base) = solved;
+    let (pd, h, base, heading) = solved;
     // The history for the next step: this step's start.
     let history = b.history.get_or_insert_with(|| History {
         x: vec![],
@@ -165,28 +172,45 @@ pub fn step(
     history.v.extend_from_slice(&s.v);
     history.end_x.resize(n, DVec2::ZERO);
     history.end_v.resize(n, DVec2::ZERO);
+    // A particle that contact held inside the solve records, along the contact force, the
+    // velocity it came with as its end velocity: the velocity pass after the step then sets
+    // what contact leaves it there, and the history takes the difference as a jump (BDF2's
+    // own velocity at a landing, from its history, points up at half the landing speed).
+    let held: Vec<DVec2> = (0..n)
+        .map(|i| {
+            contact
+                .and_then(|_| pd.held_along(i))
+                .unwrap_or(DVec2::ZERO)
+        })
+        .collect();
     let data = (
         (&mut s.v[..], &mut s.drift[..]),
         (&mut history.end_x[..], &mut history.end_v[..]),
-        (pd.end(), base, &s.x[..]),
-        &s.inv_mass[..],
+        (pd.end(), base, &s.x[..], heading),
+        (&s.inv_mass[..], &held[..]),
     );
-    threads.each(springs, data, |((v, u), (ex, ev), (z, xh, x), w)| {
-        for i in 0..v.len() {
-            if w[i] == 0.0 {
-                u[i] = v[i];
-                continue;
+    threads.each(
+        springs,
+        data,
+        |((v, u), (ex, ev), (z, xh, x, came), (w, held))| {
+            for i in 0..v.len() {
+                if w[i] == 0.0 {
+                    u[i] = v[i];
+                    continue;
+                }
+                let mut end = z[i];
+                v[i] = (end - xh[i]) * inv_hat;
+                (ex[i], ev[i]) = (end, v[i]);
+                let n = held[i];
+                ev[i] += n * (came[i] - v[i]).dot(n);
+                if end.y < floor {
+                    end.y = floor;
+                    v[i].y = 0.0;
+                }
+                u[i] = (end - x[i]) * inv_h;
             }
-            let mut end = z[i];
-            v[i] = (end - xh[i]) * inv_hat;
-            (ex[i], ev[i]) = (end, v[i]);
-            if end.y < floor {
-                end.y = floor;
-                v[i].y = 0.0;
-            }
-            u[i] = (end - x[i]) * inv_h;
-        }
-    });
+        },
+    );
     history.edits = s.edits;
     history.dt = dt.to_bits();
     b.steps += 1;

@@ -5,6 +5,7 @@
 
 use super::evaluate::forces_at;
 use super::scratch::Scratch;
+use crate::solver::contact::inside::InSolve;
 use crate::solver::forces::stiffness::{self, Sym2};
 use crate::solver::state::State;
 use crate::solver::threads::{SpringBuffers, Threads};
@@ -43,6 +44,7 @@ impl Default for CgSettings {
 /// converges to the exact step, only the rate changes. Pinned particles are held (their rows
 /// are projected out). K u and the vector updates share the solver threads like the explicit
 /// passes; the reductions sum per chunk, so the thread count changes the result by round-off.
+#[allow(clippy::too_many_arguments)]
 pub fn implicit_euler(
     s: &mut State,
     sc: &mut Scratch,
@@ -50,6 +52,7 @@ pub fn implicit_euler(
     settings: CgSettings,
     newton: u32,
     gravity: DVec2,
+    contact: Option<&InSolve>,
     threads: &Threads,
 ) {
     let n = s.x.len();
@@ -57,6 +60,9 @@ pub fn implicit_euler(
     sc.fit(n);
     sc.cg.fit(n, springs);
     let h2 = dt * dt;
+    if contact.is_some() {
+        sc.support.start(s, &s.x, h2);
+    }
     if newton > 1 {
         sc.stage_v.copy_from_slice(&s.v); // v0
     }
@@ -89,7 +95,11 @@ pub fn implicit_euler(
         },
         |a, b| a + b,
     );
-    solve(s, sc, h2, b_norm2.element_sum(), settings, threads);
+    let b_norm2 = with_support(s, sc, dt, contact, b_norm2.element_sum());
+    solve(s, sc, h2, b_norm2, settings, threads);
+    if let Some(c) = contact {
+        hold_to_contact(s, sc, dt, c);
+    }
     if newton > 1 {
         // The first step's Δv warm-starts the next time step's first solve.
         let sc = &mut *sc;
@@ -144,7 +154,11 @@ pub fn implicit_euler(
             },
             |a, b| a + b,
         );
-        solve(s, sc, h2, b_norm2.element_sum(), settings, threads);
+        let b_norm2 = with_support(s, sc, dt, contact, b_norm2.element_sum());
+        solve(s, sc, h2, b_norm2, settings, threads);
+        if let Some(c) = contact {
+            hold_to_contact(s, sc, dt, c);
+        }
     }
     let sc = &mut *sc;
     if newton > 1 {
@@ -152,6 +166,54 @@ pub fn implicit_euler(
     }
     sc.newton_steps += newton.max(1) as u64;
     sc.newton_solves += 1;
+}
+
+/// The contact forces carried from the last solves ([`crate::solver::contact::inside::Support`]) added to the right-hand side
+/// in `sc.cg.z` as their impulse over dt (free particles only); returns |b|², anew when they
+/// are there.
+fn with_support(
+    s: &State,
+    sc: &mut Scratch,
+    dt: f64,
+    contact: Option<&InSolve>,
+    b_norm2: f64,
+) -> f64 {
+    match contact {
+        Some(_) => {
+            let z = &mut sc.cg.z;
+            sc.support.add_to(z, dt);
+            let mut norm2 = 0.0;
+            for (z, &w) in z.iter_mut().zip(&s.inv_mass) {
+                if w == 0.0 {
+                    *z = DVec2::ZERO;
+                }
+                norm2 += z.length_squared();
+            }
+            norm2
+        }
+        None => b_norm2,
+    }
+}
+
+/// Contact inside the solve: the end positions x0 + h v that the Newton step found, kept out of
+/// the surfaces and the other particles ([`InSolve`]), and the velocity set to where they
+/// went, so that the next Newton step linearises where contact holds the particles.
+fn hold_to_contact(s: &mut State, sc: &mut Scratch, dt: f64, c: &InSolve) {
+    let n = s.x.len();
+    sc.x.resize(n, DVec2::ZERO);
+    sc.contact.resize(c.pair_scratch(), DVec2::ZERO);
+    for i in 0..n {
+        sc.x[i] = s.x[i] + s.v[i] * dt;
+    }
+    let (m, w, scratch) = (&s.mass[..], &s.inv_mass[..], &mut sc.contact);
+    sc.support
+        .project(c, &mut sc.x, &s.x, m, w, scratch, 1.0 / (dt * dt));
+    let inv_h = 1.0 / dt;
+    for i in 0..n {
+        if s.inv_mass[i] != 0.0 {
+            s.v[i] = (sc.x[i] - s.x[i]) * inv_h;
+        }
+    }
 }
 
 /// Solves (M − h² K) dv = b by preconditioned CG, K the blocks in `cg.blocks`, b in `cg.z`

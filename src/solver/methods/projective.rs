@@ -32,6 +32,7 @@
 //! with v1 = (x1 − x0)/h; damping, ground contact and the position update follow as for
 //! implicit Euler.
 
+use crate::solver::contact::inside::{InSolve, Support};
 use crate::solver::forces::spring::{projection_residual, scatter_pairs};
 #[cfg(target_arch = "x86_64")]
 use crate::solver::forces::wide;
@@ -138,6 +139,10 @@ pub struct Projective {
     /// The global step's right-hand side and the solve's buffers, in the factor's precision.
     global: Global,
     buffers: SpringBuffers,
+    /// The pair push's scratch, when contact runs inside the solve.
+    contact_scratch: Vec<DVec2>,
+    /// The contact forces, carried from step to step.
+    support: Support,
     /// The fill-reducing order to use; `None` picks the cheaper ([`Self::symbolic`]).
     pub(crate) fill_order: Option<FactorOrder>,
     /// The symbolic factorisation of the last matrix, kept while its pattern stays.
@@ -509,6 +514,7 @@ pub fn step(
     dt: f64,
     drag: f64,
     iterations: u32,
+    contact: Option<&InSolve>,
     threads: &Threads,
 ) -> Result<(), String> {
     let target = Target {
@@ -517,7 +523,7 @@ pub fn step(
         base: &s.x,
         velocity: &s.v,
     };
-    pd.solve(s, &target, dt, iterations, threads)?;
+    pd.solve(s, &target, dt, iterations, contact, threads)?;
     let inv_h = 1.0 / dt;
     let data = (&mut s.v[..], &pd.z[..], &s.x[..], &s.inv_mass[..]);
     threads.each(s.springs.len(), data, |(v, z, x, w)| {
@@ -534,17 +540,19 @@ impl Projective {
     /// The end positions of one implicit step ([`Target`]) by `iterations` local/global
     /// iterations, left in [`Self::end`]: every particle's, the eliminated ones (inverse mass
     /// 0) at x₀ + dt v₀ (the target's base and velocity are x₀ and v₀ for them). `s.f`
-    /// holds the body forces.
+    /// holds the body forces. With `contact`, every global step's iterate is kept out of the
+    /// surfaces and the other particles ([`InSolve`]) before the next local step reads it.
     pub fn solve(
         &mut self,
         s: &State,
         t: &Target,
         dt: f64,
         iterations: u32,
+        contact: Option<&InSolve>,
         threads: &Threads,
     ) -> Result<(), String> {
         self.prepare(s, t, threads)?;
-        self.run(s, t, dt, iterations, threads);
+        self.run(s, t, dt, iterations, contact, threads);
         Ok(())
     }
 
@@ -553,7 +561,21 @@ impl Projective {
         &self.z
     }
 
-    fn run(&mut self, s: &State, t: &Target, dt: f64, iterations: u32, threads: &Threads) {
+    /// The direction of the contact force holding particle `i` at the end of the last solve
+    /// (contact inside it), if one does.
+    pub(crate) fn held_along(&self, i: usize) -> Option<DVec2> {
+        self.support.held_along(i)
+    }
+
+    fn run(
+        &mut self,
+        s: &State,
+        t: &Target,
+        dt: f64,
+        iterations: u32,
+        contact: Option<&InSolve>,
+        threads: &Threads,
+    ) {
         let (h, scale) = (t.h, t.scale());
         let h2 = h * h;
         let springs = s.springs.len();
@@ -577,6 +599,13 @@ impl Projective {
                 my[i] = (x[i] * scale + v[i] * h) * m[i] + f[i] * h2;
             }
         });
+        match contact {
+            Some(c) => {
+                self.support.start(s, &self.z, h2 / scale);
+                self.contact_scratch.resize(c.pair_scratch(), DVec2::ZERO);
+            }
+            None => self.support.start_without(),
+        }
         for _ in 0..iterations {
             // r = s M y − (s M + ĥ² L) z: s M (y − z), and each spring's ĥ² k (d − (z_a − z_b)).
             let local = LocalStep { z: &self.z, h2 };
@@ -598,6 +627,9 @@ impl Projective {
                 s.materials
                     .add_projective_terms(&s.springs, t.base, &self.z, h, &mut self.r);
             }
+            if contact.is_some() {
+                self.support.add_to(&mut self.r, h2);
+            }
             let global = GlobalStep {
                 factor: &self.factor,
                 order: &self.order,
@@ -610,6 +642,12 @@ impl Projective {
             match &mut self.global {
                 Global::Single(rhs) => global.correct(rhs),
                 Global::Double(rhs) => global.correct(rhs),
+            }
+            if let Some(c) = contact {
+                let (m, w) = (&s.mass[..], &s.inv_mass[..]);
+                let scratch = &mut self.contact_scratch;
+                let stiffness = scale / h2;
+                (self.support).project(c, &mut self.z, &s.x, m, w, scratch, stiffness);
             }
         }
         self.iterations += iterations as u64;
@@ -798,7 +836,7 @@ mod tests {
                 fill_order: order,
                 ..Default::default()
             };
-            step(&mut s, &mut pd, dt, 0.0, 300, &threads).unwrap();
+            step(&mut s, &mut pd, dt, 0.0, 300, None, &threads).unwrap();
             let chosen = pd.factor_order().unwrap();
             assert_eq!(chosen, order.unwrap_or(FactorOrder::NestedDissection));
             ends.push((s.v.clone(), pd.factor_supernodes()));
@@ -823,7 +861,7 @@ mod tests {
         let dt = 1.0 / 60.0;
         let mut s = cloth(36);
         let mut pd = Projective::default();
-        step(&mut s, &mut pd, dt, 0.0, 10, &threads).unwrap();
+        step(&mut s, &mut pd, dt, 0.0, 10, None, &threads).unwrap();
         let tear = |s: &mut State, every: usize| {
             let mut k = 0;
             s.springs.retain(|_| {
@@ -836,14 +874,14 @@ mod tests {
         // Two iterations: the correction form converges to the same step with any factor near
         // the matrix's, so it is after a few that a factor of another matrix would show.
         let mut fresh_state = copy(&s);
-        step(&mut s, &mut pd, dt, 0.0, 2, &threads).unwrap();
+        step(&mut s, &mut pd, dt, 0.0, 2, None, &threads).unwrap();
         assert_eq!((pd.factorizations, pd.symbolic_factorizations), (2, 1));
         let mut fresh = Projective::default();
-        step(&mut fresh_state, &mut fresh, dt, 0.0, 2, &threads).unwrap();
+        step(&mut fresh_state, &mut fresh, dt, 0.0, 2, None, &threads).unwrap();
         let worst = end_gap(&s.v, &fresh_state.v, dt);
         assert!(worst < 1e-9, "the end positions differ by {worst:e}");
         tear(&mut s, 2);
-        step(&mut s, &mut pd, dt, 0.0, 10, &threads).unwrap();
+        step(&mut s, &mut pd, dt, 0.0, 10, None, &threads).unwrap();
         assert_eq!((pd.factorizations, pd.symbolic_factorizations), (3, 2));
     }
 
@@ -855,21 +893,21 @@ mod tests {
         let dt = 1.0 / 60.0;
         let mut s = cloth(36);
         let mut pd = Projective::default();
-        step(&mut s, &mut pd, dt, 0.0, 10, &threads).unwrap();
+        step(&mut s, &mut pd, dt, 0.0, 10, None, &threads).unwrap();
         assert_eq!((pd.factorizations, pd.symbolic_factorizations), (1, 1));
         for sp in &mut s.springs {
             sp.k *= 3.0;
         }
         s.touch();
         let mut fresh_state = copy(&s);
-        step(&mut s, &mut pd, dt, 0.0, 300, &threads).unwrap();
+        step(&mut s, &mut pd, dt, 0.0, 300, None, &threads).unwrap();
         assert_eq!((pd.factorizations, pd.symbolic_factorizations), (2, 1));
         let mut fresh = Projective::default();
-        step(&mut fresh_state, &mut fresh, dt, 0.0, 300, &threads).unwrap();
+        step(&mut fresh_state, &mut fresh, dt, 0.0, 300, None, &threads).unwrap();
         assert_same_end(&s.v, &fresh_state.v, dt);
         s.inv_mass[700] = 0.0;
         s.touch();
-        step(&mut s, &mut pd, dt, 0.0, 10, &threads).unwrap();
+        step(&mut s, &mut pd, dt, 0.0, 10, None, &threads).unwrap();
         assert_eq!((pd.factorizations, pd.symbolic_factorizations), (3, 2));
     }
 }

@@ -2,6 +2,7 @@
 //! from step to step, and implicit Euler's counters. One struct for both: implicit Euler's
 //! Newton iterates use the stage buffers, so a scene never holds two sets.
 
+use crate::solver::contact::inside::Support;
 use crate::solver::forces::material::GasJacobian;
 use crate::solver::forces::stiffness::{Block, Sym2};
 use crate::solver::threads::SpringBuffers;
@@ -15,6 +16,10 @@ pub struct Scratch {
     pub(super) sum_u: Vec<DVec2>,
     pub(super) sum_a: Vec<DVec2>,
     pub(super) stage_v: Vec<DVec2>,
+    /// Implicit Euler: the pair push's scratch, when contact runs inside the solve.
+    pub(super) contact: Vec<DVec2>,
+    /// Implicit Euler: the contact forces, carried from step to step.
+    pub(super) support: Support,
     pub(super) cg: Cg,
     /// The pair passes' thread split (the force pass's and every stage's).
     pub(crate) pairs: SpringBuffers,

@@ -40,6 +40,7 @@
 //! shares as one team ([`crate::solver::threads::team`]), meeting at a barrier after each colour, so the sweep is
 //! the one-thread sweep bit for bit.
 
+use crate::solver::contact::inside::InSolve;
 use crate::solver::state::State;
 use crate::solver::threads::Threads;
 use crate::solver::threads::team::Shared;
@@ -203,6 +204,8 @@ struct Block<'a> {
     y: &'a [DVec2],
     gas: Option<&'a [DVec2]>,
     dashpot: &'a [f64],
+    /// Contact inside the solve: each vertex step's result is kept out of the surfaces.
+    contact: Option<&'a InSolve<'a>>,
     /// s/h² and 1/h.
     inertia: f64,
     inv_h: f64,
@@ -261,14 +264,28 @@ impl Block<'_> {
             return;
         }
         let step = DVec2::new(h11 * f.x - h01 * f.y, h00 * f.y - h01 * f.x) / det;
+        let mut end = xi + step;
+        if let Some(c) = self.contact {
+            // Projected block descent: the vertex's constraints (the obstacles, the ground)
+            // are its own, so holding each step's result to them descends on the constrained
+            // objective.
+            c.keep_out(i, &mut end, self.s.x[i]);
+        }
         // SAFETY: the caller's.
-        unsafe { x.set(i, xi + step) };
+        unsafe { x.set(i, end) };
     }
 }
 
 /// One VBD step (see the module docs): sets v to (x₁ − x₀)/h for the free particles; the
 /// position update then moves x₀ there. `s.f` holds the body forces.
-pub fn step(s: &mut State, vb: &mut Vbd, dt: f64, settings: Settings, threads: &Threads) {
+pub fn step(
+    s: &mut State,
+    vb: &mut Vbd,
+    dt: f64,
+    settings: Settings,
+    contact: Option<&InSolve>,
+    threads: &Threads,
+) {
     if vb.revision != Some(s.revision) || vb.adjacency.len() != 2 * s.springs.len() {
         vb.colour(s);
     } else if s.materials.moves_rest_lengths() {
@@ -347,6 +364,7 @@ pub fn step(s: &mut State, vb: &mut Vbd, dt: f64, settings: Settings, threads: &
         y: &vb.y,
         gas: None,
         dashpot: s.materials.dashpot(),
+        contact,
         inertia: scale / h2,
         inv_h: 1.0 / dt,
     };
@@ -354,7 +372,10 @@ pub fn step(s: &mut State, vb: &mut Vbd, dt: f64, settings: Settings, threads: &
     let (x, gas) = (Shared::new(&mut vb.x), Shared::new(&mut vb.gas));
     let (before, previous) = (Shared::new(&mut vb.before), Shared::new(&mut vb.previous));
     let (vertices, starts) = (&vb.vertices[..], &vb.colour_starts[..]);
-    let (materials, w) = (&s.materials, &s.inv_mass[..]);
+    let (materials, w, x0) = (&s.materials, &s.inv_mass[..], &s.x[..]);
+    let mut pair_scratch = vec![DVec2::ZERO; contact.map_or(0, |c| c.pair_scratch())];
+    let pair_len = pair_scratch.len();
+    let pair_scratch = Shared::new(&mut pair_scratch);
     // The pool's threads as one team for the whole step (a fork and a join per iteration
     // cost as much as an iteration of a 32² cloth).
     threads.team(springs, |team| {
@@ -393,6 +414,16 @@ pub fn step(s: &mut State, vb: &mut Vbd, dt: f64, settings: Settings, threads: &
                             block.relax::<false>(i as usize, x)
                         }
                     };
+                }
+                team.wait();
+            }
+            if let Some(c) = contact.filter(|c| c.has_pairs()) {
+                // The pairs, pushed apart on one member while the others wait (only the
+                // particles with listed neighbours), then held out of the surfaces.
+                if !team.share(0..1).is_empty() {
+                    // SAFETY: the other members wait at the barrier below, touching nothing.
+                    let (x, out) = unsafe { (x.part(0..n), pair_scratch.part(0..pair_len)) };
+                    c.project(x, x0, w, out);
                 }
                 team.wait();
             }
