@@ -1,6 +1,6 @@
 //! The `hooke` command: the desktop app, and headless runs of scenes.
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use hooke::readable::number;
 use hooke::runner::{self, Duration, Overrides};
 use hooke::scene::presets;
@@ -21,7 +21,7 @@ struct Cli {
 /// Options of the desktop app (no subcommand).
 #[derive(Args, Debug, Clone)]
 struct AppArgs {
-    /// Scene file to open, or a built-in scene name (empty, rope, cloth32, soft_box, cloth_on_ball, slope).
+    /// Scene file to open, or a built-in scene name (the list: `scene_help`).
     #[arg(long, default_value = presets::DEFAULT_SCENE)]
     scene: String,
     /// Start running even if the scene starts paused.
@@ -132,14 +132,14 @@ struct RunArgs {
     scene: String,
     #[arg(long, value_enum)]
     integrator: Option<Integrator>,
-    /// Time step in seconds (overrides the scene's).
-    #[arg(long)]
+    /// Time step in seconds (overrides the scene's): a number or a fraction, as 1/60.
+    #[arg(long, value_parser = dt_value, allow_hyphen_values = true)]
     dt: Option<f64>,
     /// Number of steps to run.
     #[arg(long, conflicts_with = "time")]
     steps: Option<u64>,
-    /// Simulated seconds to run (rounded to whole steps).
-    #[arg(long)]
+    /// Simulated seconds to run (rounded to whole steps): a number or a fraction.
+    #[arg(long, value_parser = time_value, allow_hyphen_values = true)]
     time: Option<f64>,
     /// Stiffness for every spring, N/m.
     #[arg(long)]
@@ -210,8 +210,31 @@ struct RunArgs {
 const BAD_INPUT: u8 = 2;
 const BLEW_UP: u8 = 3;
 
+/// The command line, with the text that names what the code holds written from the code: the
+/// integrators in the description, the built-in scenes in the `--scene` help (a list written by
+/// hand fell behind twice).
+fn command() -> clap::Command {
+    let methods: Vec<&str> = Integrator::ALL.iter().map(|m| m.cli_name()).collect();
+    let about = format!(
+        "An interactive 2D mass-spring simulator: {} integrators ({}), contact, materials, \
+         cutting and tearing, a headless CLI",
+        hooke::readable::count(methods.len()),
+        methods.join(", ")
+    );
+    let scenes = presets::names().join(", ");
+    let scene_help = format!("Scene file to open, or a built-in scene name ({scenes})");
+    let run_help = format!("Scene file, or a built-in scene name ({scenes})");
+    Cli::command()
+        .about(about)
+        .mut_arg("scene", |a| a.help(scene_help))
+        .mut_subcommand("run", |c| c.mut_arg("scene", |a| a.help(run_help)))
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::from_arg_matches(&command().get_matches()) {
+        Ok(cli) => cli,
+        Err(e) => e.exit(),
+    };
     match cli.command {
         None => open_app(cli.app),
         Some(Command::Run(args)) => run(args),
@@ -237,6 +260,16 @@ fn main() -> ExitCode {
             one,
         })) => scale(&out, widths, threads, steps, repeat, one),
     }
+}
+
+/// `--dt`: seconds, or a fraction such as 1/60 ([`hooke::readable::seconds`]).
+fn dt_value(text: &str) -> Result<f64, String> {
+    hooke::readable::seconds(text).map_err(|e| format!("--dt {e}"))
+}
+
+/// `--time`: seconds, or a fraction, 0 allowed ([`hooke::readable::duration`]).
+fn time_value(text: &str) -> Result<f64, String> {
+    hooke::readable::duration(text).map_err(|e| format!("--time {e}"))
 }
 
 fn fail(message: impl std::fmt::Display) -> ExitCode {

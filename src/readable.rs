@@ -14,9 +14,110 @@ pub fn number(x: f64, decimals: usize) -> String {
     }
 }
 
+/// A count as a word in running text ("nine integrators"): one to twenty spelled out, digits
+/// past that.
+///
+/// ```
+/// assert_eq!(hooke::readable::count(9), "nine");
+/// assert_eq!(hooke::readable::count(21), "21");
+/// ```
+pub fn count(n: usize) -> String {
+    const WORDS: [&str; 21] = [
+        "zero",
+        "one",
+        "two",
+        "three",
+        "four",
+        "five",
+        "six",
+        "seven",
+        "eight",
+        "nine",
+        "ten",
+        "eleven",
+        "twelve",
+        "thirteen",
+        "fourteen",
+        "fifteen",
+        "sixteen",
+        "seventeen",
+        "eighteen",
+        "nineteen",
+        "twenty",
+    ];
+    WORDS
+        .get(n)
+        .map_or_else(|| n.to_string(), |w| w.to_string())
+}
+
+/// A time step in seconds as people write it: a number (`0.0001`, `1e-4`) or a fraction `p/q`
+/// (`1/60`, a frame's step), which must come out finite and above 0. What the command line's
+/// `--dt` and the panel's dt field read. The error completes a sentence that starts with the
+/// field's name ("--dt must be finite and > 0, got -1").
+///
+/// ```
+/// assert_eq!(hooke::readable::seconds("1/60"), Ok(1.0 / 60.0));
+/// assert_eq!(hooke::readable::seconds("2.5e-4"), Ok(2.5e-4));
+/// assert!(hooke::readable::seconds("1/0").is_err());
+/// ```
+pub fn seconds(text: &str) -> Result<f64, String> {
+    let value = fraction(text)?;
+    if !value.is_finite() || value <= 0.0 {
+        return Err(format!("must be finite and > 0, got {}", text.trim()));
+    }
+    Ok(value)
+}
+
+/// A duration in seconds, as [`seconds`] reads it but 0 allowed (`--time 0` runs no step).
+pub fn duration(text: &str) -> Result<f64, String> {
+    let value = fraction(text)?;
+    if !value.is_finite() || value < 0.0 {
+        return Err(format!("must be finite and >= 0, got {}", text.trim()));
+    }
+    Ok(value)
+}
+
+/// A number, or a fraction p/q of two numbers with q ≠ 0.
+fn fraction(text: &str) -> Result<f64, String> {
+    let text = text.trim();
+    let real = |part: &str| {
+        part.trim().parse::<f64>().map_err(|_| {
+            format!("must be a number of seconds or a fraction p/q such as 1/60, got {text}")
+        })
+    };
+    match text.split_once('/') {
+        Some((p, q)) => {
+            let (p, q) = (real(p)?, real(q)?);
+            if q == 0.0 {
+                return Err(format!("must not divide by zero, got {text}"));
+            }
+            Ok(p / q)
+        }
+        None => real(text),
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::number;
+    use super::{duration, number, seconds};
+
+    #[test]
+    fn seconds_read_numbers_and_fractions() {
+        assert_eq!(seconds("1/60"), Ok(1.0 / 60.0));
+        assert_eq!(seconds(" 1 / 60 "), Ok(1.0 / 60.0));
+        assert_eq!(seconds("0.016666666666666666"), Ok(1.0 / 60.0));
+        assert_eq!(seconds("1e-4"), Ok(1e-4));
+        assert_eq!(seconds("2/3"), Ok(2.0 / 3.0));
+        for bad in [
+            "1/0", "a/b", "-1/60", "1/-60", "0", "-1e-4", "nan", "inf", "1/60/2", "", "/",
+        ] {
+            assert!(seconds(bad).is_err(), "{bad} was read");
+        }
+        assert!(seconds("1/0").unwrap_err().contains("zero"));
+        assert_eq!(duration("0"), Ok(0.0));
+        assert_eq!(duration("6/1"), Ok(6.0));
+        assert!(duration("-1/60").is_err() && duration("x").is_err());
+    }
 
     #[test]
     fn fixed_up_to_a_billion_and_scientific_past_it() {

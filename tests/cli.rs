@@ -274,7 +274,7 @@ fn large_step_methods_report_their_iterations() {
 #[test]
 fn bad_flags() {
     let cases: [(&[&str], &str); 14] = [
-        (&["--dt", "-1"], "--dt must be finite and > 0"),
+        (&["--dt", "-1"], "--dt must be finite and > 0, got -1"),
         (
             &["--threads", "0"],
             "--threads must be between 1 and 256, got 0",
@@ -293,13 +293,13 @@ fn bad_flags() {
         ),
         (&["--newton-iterations", "-2"], "-2"),
         (&["--xpbd-iterations", "many"], "many"),
-        (&["--dt", "NaN"], "--dt must be finite and > 0"),
+        (&["--dt", "NaN"], "--dt must be finite and > 0, got NaN"),
         (
             &["--stiffness", "-3"],
             "--stiffness must be finite and >= 0",
         ),
         (&["--damping", "inf"], "--damping must be finite and >= 0"),
-        (&["--time", "-1"], "--time must be finite and >= 0"),
+        (&["--time", "-1"], "--time must be finite and >= 0, got -1"),
         (&["--integrator", "leapfrog"], "leapfrog"),
         (&["--steps", "ten"], "ten"),
         (&["--steps", "5", "--time", "1"], "cannot be used with"),
@@ -459,5 +459,185 @@ fn every_bad_scene_case_through_the_cli() {
             "names the file: {}",
             stderr(&o)
         );
+    }
+}
+
+/// `hooke --help` names every built-in scene and every integrator, both written from the code;
+/// the package's description counts the integrators right.
+#[test]
+fn help_names_every_scene_and_integrator() {
+    let o = hooke(&["--help"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let help = String::from_utf8_lossy(&o.stdout).into_owned();
+    let run = String::from_utf8_lossy(&hooke(&["run", "--help"]).stdout).into_owned();
+    for name in hooke::scene::presets::names() {
+        assert!(
+            help.contains(name),
+            "`hooke --help` does not name the scene {name}"
+        );
+        assert!(
+            run.contains(name),
+            "`hooke run --help` does not name the scene {name}"
+        );
+    }
+    let count = hooke::readable::count(hooke::sim::Integrator::ALL.len());
+    assert!(help.contains(&format!("{count} integrators")), "{help}");
+    assert!(
+        env!("CARGO_PKG_DESCRIPTION").contains(&format!("{count} integrators")),
+        "Cargo.toml's description: {}",
+        env!("CARGO_PKG_DESCRIPTION")
+    );
+    for m in hooke::sim::Integrator::ALL {
+        assert!(
+            help.contains(m.cli_name()),
+            "`hooke --help` does not name {}",
+            m.cli_name()
+        );
+    }
+}
+
+/// A scene name that is neither a file nor a built-in: the near built-in names, or all of them.
+#[test]
+fn a_misspelled_scene_name_gets_a_suggestion() {
+    assert_bad_input(&hooke(&["run", "--scene", "pil"]), "did you mean `pile`?");
+    assert_bad_input(
+        &hooke(&["run", "--scene", "clth32"]),
+        "did you mean `cloth32`?",
+    );
+    let o = hooke(&["run", "--scene", "xyzzy"]);
+    for name in hooke::scene::presets::names() {
+        assert_bad_input(&o, name);
+    }
+    // A path keeps the file's own error.
+    assert_bad_input(
+        &hooke(&["run", "--scene", "no/such.ron"]),
+        "cannot read scene",
+    );
+}
+
+/// `--dt` and `--time` take a fraction p/q: the same run as its decimal; bad fractions are
+/// refused with exit 2, naming the flag.
+#[test]
+fn dt_and_time_take_fractions() {
+    let run = |dt: &str, time: &str| {
+        let o = hooke(&[
+            "run", "--scene", "rope", "--dt", dt, "--time", time, "--json",
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let r = json(&o);
+        (r["dt"].clone(), r["steps"].clone(), r["energy_end"].clone())
+    };
+    assert_eq!(run("1/60", "1/2"), run("0.016666666666666666", "0.5"));
+    for (flag, value, needle) in [
+        ("--dt", "1/0", "--dt must not divide by zero"),
+        (
+            "--dt",
+            "a/b",
+            "--dt must be a number of seconds or a fraction",
+        ),
+        ("--dt", "-1/60", "--dt must be finite and > 0"),
+        ("--time", "1/0", "--time must not divide by zero"),
+        ("--time", "-1/60", "--time must be finite and >= 0"),
+    ] {
+        assert_bad_input(&hooke(&["run", "--scene", "rope", flag, value]), needle);
+    }
+}
+
+/// Every optional field of the scene format takes a plain value as well as `Some(..)`: the two
+/// files load to the same scene and `hooke run` gives the same JSON for both.
+#[test]
+fn optional_fields_take_plain_values() {
+    let spring =
+        |extra: &str| format!("springs: [(a: 0, b: 1, stiffness: 100.0, rest: 0.1{extra})],");
+    let grid = |extra: &str| {
+        format!(
+            "generate: [Grid(cols: 3, rows: 3, min: (0.4, 0.5), max: (0.5, 0.6), mass: 0.1, \
+             stiffness: 1000.0, shear: true, pin: First{extra})],"
+        )
+    };
+    let ring = |extra: &str| {
+        format!("generate: [Ring(center: (0.5, 0.5), radius: 0.1, segments: 8{extra})],")
+    };
+    // (the field, written plain, written with Some)
+    let cases: Vec<(&str, String, String)> = vec![
+        ("ground", "ground: 0.0,".into(), "ground: Some(0.0),".into()),
+        (
+            "click",
+            "click: (radius: 0.1),".into(),
+            "click: Some((radius: 0.1)),".into(),
+        ),
+        ("tear", "tear: 0.5,".into(), "tear: Some(0.5),".into()),
+        (
+            "contact",
+            "ground: 0.0, contact: (radius: 0.01, friction: 0.3),".into(),
+            "ground: 0.0, contact: Some((radius: 0.01, friction: 0.3)),".into(),
+        ),
+        (
+            "a spring's damping",
+            spring(", damping: 5.0"),
+            spring(", damping: Some(5.0)"),
+        ),
+        (
+            "a spring's actuation",
+            spring(", actuation: (amplitude: 0.1, frequency: 2.0)"),
+            spring(", actuation: Some((amplitude: 0.1, frequency: 2.0))"),
+        ),
+        (
+            "a spring's plastic",
+            spring(", plastic: (yield: 0.01, rate: 1.0)"),
+            spring(", plastic: Some((yield: 0.01, rate: 1.0))"),
+        ),
+        (
+            "a grid's damping",
+            grid(", damping: 2.0"),
+            grid(", damping: Some(2.0)"),
+        ),
+        (
+            "a grid's plastic",
+            grid(", plastic: (yield: 0.01, rate: 1.0)"),
+            grid(", plastic: Some((yield: 0.01, rate: 1.0))"),
+        ),
+        (
+            "a ring's damping",
+            ring(", damping: 2.0"),
+            ring(", damping: Some(2.0)"),
+        ),
+    ];
+    let scene = |body: &str| {
+        format!(
+            "(gravity: (0.0, -9.8), damping: 1.0, integrator: SymplecticEuler, dt: 0.001, \
+             particles: [(pos: (0.5, 0.9), pinned: true), (pos: (0.6, 0.9))], {body})"
+        )
+    };
+    let timing = ["scene", "wall_s", "steps_per_s", "spring_updates_per_s"];
+    for (i, (field, plain, some)) in cases.iter().enumerate() {
+        let (a, b) = (
+            temp(&format!("plain{i}.ron")),
+            temp(&format!("some{i}.ron")),
+        );
+        std::fs::write(&a, scene(plain)).unwrap();
+        std::fs::write(&b, scene(some)).unwrap();
+        let (la, lb) = (
+            hooke::scene::LoadedScene::read(&a).unwrap_or_else(|e| panic!("{field}: {e}")),
+            hooke::scene::LoadedScene::read(&b).unwrap_or_else(|e| panic!("{field}: {e}")),
+        );
+        assert_eq!(la.scene, lb.scene, "{field}");
+        let run = |p: &PathBuf| {
+            let o = hooke(&[
+                "run",
+                "--scene",
+                p.to_str().unwrap(),
+                "--steps",
+                "200",
+                "--json",
+            ]);
+            assert!(o.status.success(), "{field}: {}", stderr(&o));
+            let mut r = json(&o);
+            for t in timing {
+                r.as_object_mut().unwrap().remove(t);
+            }
+            r
+        };
+        assert_eq!(run(&a), run(&b), "{field}");
     }
 }

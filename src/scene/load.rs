@@ -31,6 +31,13 @@ pub enum SceneError {
         /// What the parser expected.
         message: String,
     },
+    /// No such file, and no built-in scene of that name.
+    Unknown {
+        /// The name as given.
+        name: String,
+        /// The built-in names near it (a typo's), nearest first; empty when none is.
+        near: Vec<&'static str>,
+    },
     /// The file parses but describes an impossible scene.
     Invalid {
         /// The file.
@@ -52,6 +59,16 @@ impl fmt::Display for SceneError {
                 col,
                 message,
             } => write!(f, "{}:{line}:{col}: {message}", path.display()),
+            SceneError::Unknown { name, near } => {
+                write!(f, "no scene file or built-in scene named `{name}`")?;
+                if near.is_empty() {
+                    let all: Vec<&str> = super::presets::BUILTIN.iter().map(|(n, _)| *n).collect();
+                    write!(f, " (built-in scenes: {})", all.join(", "))
+                } else {
+                    let listed: Vec<String> = near.iter().map(|n| format!("`{n}`")).collect();
+                    write!(f, "; did you mean {}?", listed.join(" or "))
+                }
+            }
             SceneError::Invalid { path, problems } => {
                 write!(f, "invalid scene {}:", path.display())?;
                 for p in problems {
@@ -94,12 +111,14 @@ impl LoadedScene {
 
     /// Parses and validates RON text; `path` only names the source in errors.
     pub fn parse(text: &str, path: &Path) -> Result<Self, SceneError> {
-        let scene: Scene = ron::from_str(text).map_err(|e| SceneError::Parse {
-            path: path.to_owned(),
-            line: e.span.start.line,
-            col: e.span.start.col,
-            message: super::typo::message(&e.code),
-        })?;
+        let scene: Scene = super::ron_options()
+            .from_str(text)
+            .map_err(|e| SceneError::Parse {
+                path: path.to_owned(),
+                line: e.span.start.line,
+                col: e.span.start.col,
+                message: super::typo::message(&e.code),
+            })?;
         Self::from_scene(scene, Some(path.to_owned()))
     }
 

@@ -15,3 +15,10 @@ pub use load::{
     replace_contents, replace_obstacles, snapshot, spawn_expanded, to_ron,
 };
 pub use validate::validate;
+
+/// How scene files are read: RON with `implicit_some`, so that an optional field takes a plain
+/// value (`damping: 5.0`, `ground: 0.0`, `contact: (radius: 0.01)`) as well as `Some(..)` and
+/// `None`, as every other number of the format is written.
+pub fn ron_options() -> ron::Options {
+    ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+}

@@ -29,13 +29,28 @@ pub const BUILTIN: &[(&str, &str)] = &[
 /// The scene the app opens with: the assignment's empty canvas.
 pub const DEFAULT_SCENE: &str = "empty";
 
-/// Loads a scene by file path or, when no such file exists, by built-in name.
+/// The built-in scenes' names, in the order of [`BUILTIN`].
+pub fn names() -> Vec<&'static str> {
+    BUILTIN.iter().map(|(n, _)| *n).collect()
+}
+
+/// Loads a scene by file path or, when no such file exists, by built-in name. A name that is
+/// neither (no path separator, no `.ron`) is answered with the built-in names near it, or with
+/// all of them.
 pub fn resolve(name_or_path: &str) -> Result<LoadedScene, SceneError> {
     let path = Path::new(name_or_path);
-    if !path.exists()
-        && let Some((name, text)) = BUILTIN.iter().find(|(n, _)| *n == name_or_path)
-    {
-        return LoadedScene::parse(text, &PathBuf::from(format!("assets/scenes/{name}.ron")));
+    if !path.exists() {
+        if let Some((name, text)) = BUILTIN.iter().find(|(n, _)| *n == name_or_path) {
+            return LoadedScene::parse(text, &PathBuf::from(format!("assets/scenes/{name}.ron")));
+        }
+        let looks_like_a_path =
+            name_or_path.contains(['/', '\\']) || name_or_path.ends_with(".ron");
+        if !looks_like_a_path {
+            return Err(SceneError::Unknown {
+                name: name_or_path.to_string(),
+                near: super::typo::near_names(name_or_path, &names()),
+            });
+        }
     }
     LoadedScene::read(path)
 }

@@ -322,6 +322,8 @@ pub fn side_panel(
                     slider(&mut p.dt, 1e-6..=1.0 / 30.0)
                         .logarithmic(true)
                         .custom_formatter(|v, _| format!("{v:.2e}"))
+                        // Typed: a number or a fraction, as 1/60.
+                        .custom_parser(|text| crate::readable::seconds(text).ok())
                         .suffix(" s"),
                 );
                 ui.end_row();
