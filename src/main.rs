@@ -110,6 +110,14 @@ enum BenchCommand {
         #[arg(long, default_value = "docs/reports")]
         out: PathBuf,
     },
+    /// The shipped pile under every method at dt = 1/600, 1/240 and 1/60 s: deepest
+    /// penetration, closest pair, energy gain, time to rest, cells turned and cost; writes CSV,
+    /// markdown and a diagram.
+    Contact {
+        /// Directory to write into.
+        #[arg(long, default_value = "docs/reports")]
+        out: PathBuf,
+    },
     /// Largest stable dt per hard scene and integrator (bisection) against the theoretical
     /// limit, and the energy change at half that dt; writes CSV and a markdown table.
     Stability {
@@ -251,6 +259,7 @@ fn main() -> ExitCode {
             stability(&out, &scenes, steps)
         }
         Some(Command::Bench(BenchCommand::LargeSteps { out })) => large_steps(&out),
+        Some(Command::Bench(BenchCommand::Contact { out })) => contact(&out),
         Some(Command::Bench(BenchCommand::Scale {
             out,
             widths,
@@ -417,6 +426,34 @@ fn work_precision(out: &std::path::Path, quick: bool) -> ExitCode {
     )
 }
 
+fn contact(out: &std::path::Path) -> ExitCode {
+    use hooke::bench::{contact as ct, plot};
+    if let Err(e) = std::fs::create_dir_all(out) {
+        return fail(format!("cannot create {}: {e}", out.display()));
+    }
+    let machine = hooke::bench::machine();
+    eprintln!("hooke bench contact on {machine}");
+    let report = match ct::run(|what| eprintln!("  {what}")) {
+        Ok(r) => r,
+        Err(e) => return fail(e),
+    };
+    let rows = ct::diagram_rows(&report);
+    let rows: Vec<&hooke::bench::work_precision::Row> = rows.iter().collect();
+    let labels = (
+        "wall time per simulated second (s)",
+        "closest unjoined pair's overlap (share of 2r)",
+    );
+    let title = "contact: the pile at 1/600, 1/240 and 1/60 s";
+    if let Err(e) = plot::write_diagram_with(&rows, title, labels, &out.join("contact")) {
+        return fail(e);
+    }
+    let md = ct::markdown(&report, &machine, "hooke bench contact");
+    write_report(
+        out,
+        &[("contact.csv", &ct::csv(&report)), ("contact.md", &md)],
+    )
+}
+
 fn large_steps(out: &std::path::Path) -> ExitCode {
     use hooke::bench::{large_steps as ls, plot};
     if let Err(e) = std::fs::create_dir_all(out) {
@@ -442,7 +479,8 @@ fn large_steps(out: &std::path::Path) -> ExitCode {
         let stem = out.join(format!("large-steps-{}", p.name));
         let title = format!("large steps: {} (dt = 1/30 to 1/960 s)", p.name);
         let x_label = "wall time per simulated second (s)";
-        if let Err(e) = plot::write_diagram_with(&rows, &title, x_label, &stem) {
+        let labels = (x_label, "max position error (m)");
+        if let Err(e) = plot::write_diagram_with(&rows, &title, labels, &stem) {
             return fail(e);
         }
     }

@@ -274,8 +274,16 @@ fn pile_figures() {
         inverted(&se_start, &se_cells)
     );
     let heavy = std::env::var("HEAVY").is_ok().then_some((1e5, 10.0));
+    let newton: Option<u32> = std::env::var("NEWTON").ok().and_then(|n| n.parse().ok());
     for m in LARGE_STEP {
-        let (worst, end, s, c) = run(pile(m, FRAME, heavy), FRAME, 6.0);
+        let mut app = pile(m, FRAME, heavy);
+        if let Some(n) = newton {
+            app.world_mut()
+                .resource_mut::<SimParams>()
+                .iterations
+                .newton = n;
+        }
+        let (worst, end, s, c) = run(app, FRAME, 6.0);
         println!(
             "{m:?}: worst {worst:?} end E {:.2} KE {:.3e} areas {:?} inverted {}",
             end.energy,

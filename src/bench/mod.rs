@@ -1,5 +1,6 @@
 //! Benchmarks and reports (`hooke bench ...`): measured figures, never test assertions.
 
+pub mod contact;
 pub mod equilibrium;
 pub mod large_steps;
 pub mod perf;

@@ -1,4 +1,5 @@
-//! Log-log work-precision diagrams (error against wall time), as SVG and PNG.
+//! Log-log work-precision diagrams (error against wall time), as SVG and PNG; the contact
+//! report draws its overlap against cost on the same axes.
 
 use super::work_precision::Row;
 use crate::sim::Integrator;
@@ -32,14 +33,19 @@ fn colour(i: Integrator) -> RGBColor {
 
 /// Writes `<stem>.svg` and `<stem>.png` for one scene's rows.
 pub fn write_diagram(rows: &[&Row], title: &str, stem: &Path) -> Result<(), String> {
-    write_diagram_with(rows, title, "wall time (s)", stem)
+    write_diagram_with(
+        rows,
+        title,
+        ("wall time (s)", "max position error (m)"),
+        stem,
+    )
 }
 
-/// [`write_diagram`] with another label for the time axis.
+/// [`write_diagram`] with other labels for the time and error axes.
 pub fn write_diagram_with(
     rows: &[&Row],
     title: &str,
-    x_label: &str,
+    labels: (&str, &str),
     stem: &Path,
 ) -> Result<(), String> {
     // The PNG's text is drawn by ab_glyph from egui's bundled font: no system fonts needed.
@@ -51,7 +57,7 @@ pub fn write_diagram_with(
     let svg = stem.with_extension("svg");
     let png = stem.with_extension("png");
     let svg_area = SVGBackend::new(&svg, SIZE).into_drawing_area();
-    draw(svg_area, rows, title, x_label)?;
+    draw(svg_area, rows, title, labels)?;
     // Drawn into memory and encoded by the png crate (bevy's renderer uses it too), rather than
     // through plotters' own encoder, which brings a second, older `image` crate to the build.
     let mut rgb = vec![0u8; SIZE.0 as usize * SIZE.1 as usize * 3];
@@ -59,7 +65,7 @@ pub fn write_diagram_with(
         BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area(),
         rows,
         title,
-        x_label,
+        labels,
     )?;
     write_png(&png, &rgb, SIZE)
 }
@@ -80,7 +86,7 @@ fn draw<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     rows: &[&Row],
     title: &str,
-    x_label: &str,
+    (x_label, y_label): (&str, &str),
 ) -> Result<(), String>
 where
     DB::ErrorType: 'static,
@@ -114,7 +120,7 @@ where
     chart
         .configure_mesh()
         .x_desc(x_label)
-        .y_desc("max position error (m)")
+        .y_desc(y_label)
         .x_label_formatter(&|v| format!("{v:.0e}"))
         .y_label_formatter(&|v| format!("{v:.0e}"))
         .label_style(("sans-serif", 15))
