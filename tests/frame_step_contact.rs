@@ -63,17 +63,7 @@ fn look(app: &App) -> Look {
     let params = app.world().resource::<SimParams>();
     let r = params.contact.unwrap().radius;
     let x = solver.x();
-    let joined: std::collections::HashSet<(u32, u32)> = (solver.state().springs().iter())
-        .map(|s| (s.a.min(s.b), s.a.max(s.b)))
-        .collect();
-    let mut closest = f64::INFINITY;
-    for i in 0..x.len() {
-        for j in i + 1..x.len() {
-            if !joined.contains(&(i as u32, j as u32)) {
-                closest = closest.min((x[i] - x[j]).length() / (2.0 * r));
-            }
-        }
-    }
+    let closest = closest_unjoined(solver).0 / (2.0 * r);
     let obstacles = app.world().resource::<Obstacles>();
     let ground = params.ground.unwrap();
     let mut deepest: f64 = 0.0;
@@ -303,51 +293,17 @@ fn pile_figures() {
 #[test]
 fn a_folding_strip_at_a_frames_step_does_not_pass_through_itself() {
     for m in [Integrator::Xpbd, Integrator::Vbd] {
-        let (length, cols) = (0.9, 96);
-        let d = length / (cols - 1) as f64;
-        let r = 0.45 * d;
-        let mut scene = bare_scene(m, FRAME);
-        scene.gravity = (0.0, -9.8);
-        scene.ground = Some(0.0);
-        scene.damping = 1.0;
-        scene.generate = vec![hooke::scene::Generator::Grid {
-            cols: 2,
-            rows: cols,
-            min: (0.5, r + 0.01),
-            max: (0.5 + d, r + 0.01 + length),
-            mass: 0.01,
-            stiffness: 1e4,
-            shear: true,
-            pin: hooke::scene::Pin::None,
-            vel: (0.3, 0.0),
-            damping: None,
-            plastic: None,
-        }];
-        scene.contact = Some(hooke::sim::ContactSettings {
-            radius: r,
-            friction: 0.3,
-            restitution: 0.0,
-            particles: true,
-        });
+        let (scene, r) = folding_strip(m, FRAME);
         let mut app = app_with(scene);
         let mut touched = 0;
         for s in 0..120 {
             step(&mut app, 1);
-            let solver = app.world().resource::<Solver>();
-            let x = solver.x();
-            let joined: std::collections::HashSet<(u32, u32)> = (solver.state().springs().iter())
-                .map(|s| (s.a.min(s.b), s.a.max(s.b)))
-                .collect();
-            for i in 0..x.len() {
-                for j in i + 1..x.len() {
-                    let dist = (x[i] - x[j]).length();
-                    assert!(
-                        joined.contains(&(i as u32, j as u32)) || dist >= 0.9 * 2.0 * r,
-                        "{m:?}: particles {i} and {j} {dist} m apart after step {s} (2r = {})",
-                        2.0 * r
-                    );
-                }
-            }
+            let (dist, i, j) = closest_unjoined(solver(&app));
+            assert!(
+                dist >= 0.9 * 2.0 * r,
+                "{m:?}: particles {i} and {j} {dist} m apart after step {s} (2r = {})",
+                2.0 * r
+            );
             touched = touched.max(app.world().resource::<Obstacles>().contacts.pairs);
         }
         assert!(

@@ -5,19 +5,9 @@ mod common;
 use bevy::math::DVec2;
 use common::*;
 use hooke::scene::{Generator, Pin, Scene};
-use hooke::sim::{ContactSettings, Integrator, Obstacles, Solver};
+use hooke::sim::{Integrator, Obstacles};
 
 const G: f64 = 9.8;
-
-/// Contact settings with particle pairs on.
-fn pairs_on(radius: f64, friction: f64) -> Option<ContactSettings> {
-    Some(ContactSettings {
-        radius,
-        friction,
-        restitution: 0.0,
-        particles: true,
-    })
-}
 
 /// A soft box: a `n`×`n` grid with shear springs, `size` wide, its lower left corner at `at`.
 fn soft_box(n: usize, size: f64, at: (f64, f64), k: f64) -> Generator {
@@ -36,27 +26,6 @@ fn soft_box(n: usize, size: f64, at: (f64, f64), k: f64) -> Generator {
         damping: None,
         plastic: None,
     }
-}
-
-/// The closest pair of particles that no spring joins, and its distance.
-fn closest_unjoined(solver: &Solver) -> (f64, usize, usize) {
-    let x = solver.x();
-    let joined: std::collections::HashSet<(u32, u32)> = solver
-        .state()
-        .springs()
-        .iter()
-        .map(|s| (s.a.min(s.b), s.a.max(s.b)))
-        .collect();
-    let mut best = (f64::INFINITY, 0, 0);
-    for i in 0..x.len() {
-        for j in i + 1..x.len() {
-            let d = (x[i] - x[j]).length();
-            if d < best.0 && !joined.contains(&(i as u32, j as u32)) {
-                best = (d, i, j);
-            }
-        }
-    }
-    best
 }
 
 /// The step each integrator is used with here: the force-based ones at the app's 1e-4 s
@@ -152,28 +121,7 @@ fn a_folding_strip_does_not_pass_through_itself() {
         (Integrator::ProjectiveDynamics, large),
         (Integrator::Xpbd, large),
     ] {
-        let (length, cols) = (0.9, 96);
-        let d = length / (cols - 1) as f64;
-        let r = 0.45 * d;
-        let mut scene = bare_scene(integrator, dt);
-        scene.gravity = (0.0, -G);
-        scene.ground = Some(0.0);
-        scene.damping = 1.0;
-        // Upright, its foot just above the ground, leaning a little so that it folds.
-        scene.generate = vec![Generator::Grid {
-            cols: 2,
-            rows: cols,
-            min: (0.5, r + 0.01),
-            max: (0.5 + d, r + 0.01 + length),
-            mass: 0.01,
-            stiffness: 1e4,
-            shear: true,
-            pin: Pin::None,
-            vel: (0.3, 0.0),
-            damping: None,
-            plastic: None,
-        }];
-        scene.contact = pairs_on(r, 0.3);
+        let (scene, r) = folding_strip(integrator, dt);
         let mut app = app_with(scene);
         let steps = (2.0 / dt).round() as u64;
         let mut touched = 0;

@@ -3,8 +3,8 @@
 
 use bevy::math::DVec2;
 use bevy::prelude::*;
-use hooke::scene::{LoadedScene, ParticleDef, Scene, SpringDef, load_into_world};
-use hooke::sim::{self, Integrator, Solver};
+use hooke::scene::{Generator, LoadedScene, ParticleDef, Pin, Scene, SpringDef, load_into_world};
+use hooke::sim::{self, ContactSettings, Integrator, Solver};
 
 /// A scene with no gravity, damping or ground: pure springs.
 pub fn bare_scene(integrator: Integrator, dt: f64) -> Scene {
@@ -96,4 +96,63 @@ pub fn max_difference(a: &[DVec2], b: &[DVec2]) -> f64 {
         .zip(b)
         .map(|(p, q)| (*p - *q).length())
         .fold(0.0, f64::max)
+}
+
+/// Contact settings with particle pairs on.
+pub fn pairs_on(radius: f64, friction: f64) -> Option<ContactSettings> {
+    Some(ContactSettings {
+        radius,
+        friction,
+        restitution: 0.0,
+        particles: true,
+    })
+}
+
+/// The closest pair of particles that no spring joins, and its distance.
+pub fn closest_unjoined(solver: &Solver) -> (f64, usize, usize) {
+    let x = solver.x();
+    let joined: std::collections::HashSet<(u32, u32)> = solver
+        .state()
+        .springs()
+        .iter()
+        .map(|s| (s.a.min(s.b), s.a.max(s.b)))
+        .collect();
+    let mut best = (f64::INFINITY, 0, 0);
+    for i in 0..x.len() {
+        for j in i + 1..x.len() {
+            let d = (x[i] - x[j]).length();
+            if d < best.0 && !joined.contains(&(i as u32, j as u32)) {
+                best = (d, i, j);
+            }
+        }
+    }
+    best
+}
+
+/// A strip of cloth (2 × 96 particles, 0.9 m) standing on its foot just above the ground,
+/// leaning a little so that it folds onto itself, with particle pairs on at a radius of 0.45
+/// of its spacing; and that radius.
+pub fn folding_strip(integrator: Integrator, dt: f64) -> (Scene, f64) {
+    let (length, cols) = (0.9, 96);
+    let d = length / (cols - 1) as f64;
+    let r = 0.45 * d;
+    let mut scene = bare_scene(integrator, dt);
+    scene.gravity = (0.0, -9.8);
+    scene.ground = Some(0.0);
+    scene.damping = 1.0;
+    scene.generate = vec![Generator::Grid {
+        cols: 2,
+        rows: cols,
+        min: (0.5, r + 0.01),
+        max: (0.5 + d, r + 0.01 + length),
+        mass: 0.01,
+        stiffness: 1e4,
+        shear: true,
+        pin: Pin::None,
+        vel: (0.3, 0.0),
+        damping: None,
+        plastic: None,
+    }];
+    scene.contact = pairs_on(r, 0.3);
+    (scene, r)
 }

@@ -128,18 +128,22 @@ impl<'a> InSolve<'a> {
 
     /// The whole iterate: pairs pushed apart, then every free particle kept out of the
     /// surfaces (which wins where the two disagree: a particle pressed into the ground by
-    /// another stays on it, and the other moves). `from` is where the step began.
+    /// another stays on it, and the other moves). `from` is where the step began. Calls
+    /// `each(i, x, normal)` for every free particle where it ends, with the normal of the last
+    /// surface it touched.
     pub(crate) fn project(
         &self,
         x: &mut [DVec2],
         from: &[DVec2],
         w: &[f64],
         scratch: &mut [DVec2],
+        mut each: impl FnMut(usize, DVec2, Option<DVec2>),
     ) {
         self.separate(x, w, scratch);
         for (i, ((x, &from), &w)) in x.iter_mut().zip(from).zip(w).enumerate() {
             if w != 0.0 {
-                self.keep_out(i, x, from);
+                let normal = self.keep_out(i, x, from);
+                each(i, *x, normal);
             }
         }
     }
@@ -243,35 +247,32 @@ impl Support {
     ) {
         self.before.clear();
         self.before.extend_from_slice(x);
-        // As InSolve::project, keeping each particle's contact normal.
-        c.separate(x, w, scratch);
-        for i in 0..x.len() {
-            if w[i] == 0.0 {
-                continue;
+        let Support {
+            force,
+            gain,
+            normal,
+            last,
+            before,
+        } = self;
+        c.project(x, from, w, scratch, |i, x, surface| {
+            let push = x - before[i];
+            // The surface's normal, or a pair's push when no surface touched the particle.
+            if let Some(n) = surface.or_else(|| push.try_normalize()) {
+                normal[i] = n;
             }
-            let paired = x[i] - self.before[i];
-            match c.keep_out(i, &mut x[i], from[i]) {
-                Some(n) => self.normal[i] = n,
-                None => {
-                    if let Some(n) = paired.try_normalize() {
-                        self.normal[i] = n;
-                    }
-                }
-            }
-            let push = x[i] - self.before[i];
-            let f = &mut self.force[i];
+            let f = &mut force[i];
             if push != DVec2::ZERO {
-                *f += push * (self.gain[i] * stiffness * mass[i]);
+                *f += push * (gain[i] * stiffness * mass[i]);
             } else if *f != DVec2::ZERO {
                 // Moved away from the contact since the last projection: the force eases.
                 let along = *f / f.length();
-                let away = (x[i] - self.last[i]).dot(along);
+                let away = (x - last[i]).dot(along);
                 if away > 0.0 {
-                    let left = (f.length() - away * self.gain[i] * stiffness * mass[i]).max(0.0);
+                    let left = (f.length() - away * gain[i] * stiffness * mass[i]).max(0.0);
                     *f = along * left;
                 }
             }
-            self.last[i] = x[i];
-        }
+            last[i] = x;
+        });
     }
 }

@@ -137,7 +137,7 @@ pub fn step(
             velocity: &b.vhat,
         };
         b.main.solve(s, &target, dt, iterations, contact, threads)?;
-        (&b.main, target.h, &b.xhat[..], &b.vhat[..])
+        (&b.main, target.h, &b.xhat[..])
     } else {
         let target = Target {
             h: dt,
@@ -148,12 +148,14 @@ pub fn step(
         b.startup
             .solve(s, &target, dt, iterations, contact, threads)?;
         b.startup_steps += 1;
-        // The velocity each particle came with, for the contact held ones below.
-        b.vhat.clear();
-        b.vhat.extend_from_slice(&s.v);
-        (&b.startup, dt, &s.x[..], &b.vhat[..])
+        if contact.is_some() {
+            // The velocity each particle came with, for the contact held ones below.
+            b.vhat.clear();
+            b.vhat.extend_from_slice(&s.v);
+        }
+        (&b.startup, dt, &s.x[..])
     };
-    let (pd, h, base, heading) = solved;
+    let (pd, h, base) = solved;
     // The history for the next step: this step's start.
     let history = b.history.get_or_insert_with(|| History {
         x: vec![],
@@ -172,45 +174,42 @@ pub fn step(
     history.v.extend_from_slice(&s.v);
     history.end_x.resize(n, DVec2::ZERO);
     history.end_v.resize(n, DVec2::ZERO);
-    // A particle that contact held inside the solve records, along the contact force, the
-    // velocity it came with as its end velocity: the velocity pass after the step then sets
-    // what contact leaves it there, and the history takes the difference as a jump (BDF2's
-    // own velocity at a landing, from its history, points up at half the landing speed).
-    let held: Vec<DVec2> = (0..n)
-        .map(|i| {
-            contact
-                .and_then(|_| pd.held_along(i))
-                .unwrap_or(DVec2::ZERO)
-        })
-        .collect();
     let data = (
         (&mut s.v[..], &mut s.drift[..]),
         (&mut history.end_x[..], &mut history.end_v[..]),
-        (pd.end(), base, &s.x[..], heading),
-        (&s.inv_mass[..], &held[..]),
+        (pd.end(), base, &s.x[..]),
+        &s.inv_mass[..],
     );
-    threads.each(
-        springs,
-        data,
-        |((v, u), (ex, ev), (z, xh, x, came), (w, held))| {
-            for i in 0..v.len() {
-                if w[i] == 0.0 {
-                    u[i] = v[i];
-                    continue;
-                }
-                let mut end = z[i];
-                v[i] = (end - xh[i]) * inv_hat;
-                (ex[i], ev[i]) = (end, v[i]);
-                let n = held[i];
-                ev[i] += n * (came[i] - v[i]).dot(n);
-                if end.y < floor {
-                    end.y = floor;
-                    v[i].y = 0.0;
-                }
-                u[i] = (end - x[i]) * inv_h;
+    threads.each(springs, data, |((v, u), (ex, ev), (z, xh, x), w)| {
+        for i in 0..v.len() {
+            if w[i] == 0.0 {
+                u[i] = v[i];
+                continue;
             }
-        },
-    );
+            let mut end = z[i];
+            v[i] = (end - xh[i]) * inv_hat;
+            (ex[i], ev[i]) = (end, v[i]);
+            if end.y < floor {
+                end.y = floor;
+                v[i].y = 0.0;
+            }
+            u[i] = (end - x[i]) * inv_h;
+        }
+    });
+    if contact.is_some() {
+        // A particle that contact held inside the solve records, along the contact's normal,
+        // the velocity it came with (v̂) as its end velocity: the velocity pass after the step
+        // then sets what contact leaves it there, and the history takes the difference as a
+        // jump (BDF2's own velocity at a landing, from its history, points up at half the
+        // landing speed).
+        let (ev, came) = (&mut history.end_v, &b.vhat);
+        for i in 0..n {
+            if let Some(normal) = pd.held_along(i) {
+                let own = ev[i];
+                ev[i] = own + normal * (came[i] - own).dot(normal);
+            }
+        }
+    }
     history.edits = s.edits;
     history.dt = dt.to_bits();
     b.steps += 1;

@@ -95,11 +95,8 @@ pub fn implicit_euler(
         },
         |a, b| a + b,
     );
-    let b_norm2 = with_support(s, sc, dt, contact, b_norm2.element_sum());
-    solve(s, sc, h2, b_norm2, settings, threads);
-    if let Some(c) = contact {
-        hold_to_contact(s, sc, dt, c);
-    }
+    let linear = (h2, b_norm2.element_sum(), settings);
+    newton_step(s, sc, dt, linear, contact, threads);
     if newton > 1 {
         // The first step's Δv warm-starts the next time step's first solve.
         let sc = &mut *sc;
@@ -154,11 +151,8 @@ pub fn implicit_euler(
             },
             |a, b| a + b,
         );
-        let b_norm2 = with_support(s, sc, dt, contact, b_norm2.element_sum());
-        solve(s, sc, h2, b_norm2, settings, threads);
-        if let Some(c) = contact {
-            hold_to_contact(s, sc, dt, c);
-        }
+        let linear = (h2, b_norm2.element_sum(), settings);
+        newton_step(s, sc, dt, linear, contact, threads);
     }
     let sc = &mut *sc;
     if newton > 1 {
@@ -166,6 +160,24 @@ pub fn implicit_euler(
     }
     sc.newton_steps += newton.max(1) as u64;
     sc.newton_solves += 1;
+}
+
+/// One Newton step's linear solve for the right-hand side in `sc.cg.z` (`linear`: h², |b|²
+/// and the CG settings), with contact inside it: the contact forces added to b before the
+/// solve, and the end positions held out of contact after it.
+fn newton_step(
+    s: &mut State,
+    sc: &mut Scratch,
+    dt: f64,
+    (h2, b_norm2, settings): (f64, f64, CgSettings),
+    contact: Option<&InSolve>,
+    threads: &Threads,
+) {
+    let b_norm2 = with_support(s, sc, dt, contact, b_norm2);
+    solve(s, sc, h2, b_norm2, settings, threads);
+    if let Some(c) = contact {
+        hold_to_contact(s, sc, dt, c);
+    }
 }
 
 /// The contact forces carried from the last solves ([`crate::solver::contact::inside::Support`]) added to the right-hand side

@@ -423,7 +423,7 @@ pub fn step(
                 if !team.share(0..1).is_empty() {
                     // SAFETY: the other members wait at the barrier below, touching nothing.
                     let (x, out) = unsafe { (x.part(0..n), pair_scratch.part(0..pair_len)) };
-                    c.project(x, x0, w, out);
+                    c.project(x, x0, w, out, |_, _, _| {});
                 }
                 team.wait();
             }
