@@ -542,6 +542,21 @@ fn every_control_works_under_real_input_and_the_log_stays_quiet() {
     s.x(&["click", "1"]);
     s.expect("tearing off", |st| st["tear"].is_null());
 
+    // The dt field takes a typed fraction: 1/60 is a frame's step, to the bit of 1.0 / 60.0.
+    // A click on the value box opens it with its text selected, so typing replaces it.
+    let type_dt = |text: &str| {
+        s.move_px(225, 263);
+        s.x(&["click", "1"]);
+        std::thread::sleep(Duration::from_millis(300));
+        s.x(&["windowfocus", "--sync", &s.window]);
+        s.x(&["type", "--delay", "80", text]);
+        s.key("Return");
+    };
+    type_dt("1/60");
+    s.expect("dt 1/60 typed", |st| st["dt"] == 1.0 / 60.0);
+    type_dt("1e-4");
+    s.expect("dt back to 1e-4", |st| st["dt"] == 1e-4);
+
     // Left click on empty canvas: three particles joined within 0.15, the first pinned.
     for (i, &(x, y)) in [(0.5, 0.8), (0.6, 0.8), (0.55, 0.7)].iter().enumerate() {
         s.move_to(x, y);
