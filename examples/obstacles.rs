@@ -54,6 +54,7 @@ fn main() {
             friction: 0.8,
             restitution: 0.0,
             particles: false,
+            outlines: false,
         }),
         ..Default::default()
     };

@@ -573,6 +573,9 @@ fn particle_sweep(
         // The contact pass needs the velocity the step moves with (the separate kick keeps it).
         step::keep_start_velocity(&mut solver.state);
     }
+    let around = surroundings(&params, &obstacles);
+    let s = &mut *solver;
+    step::ready_outlines(&s.state, &mut s.work, dt, &around);
     let (mu, ground) = (pass_damping(&params), clamped_ground(&params));
     let sweep = step::sweep(&mut solver.state, integrator, dt, mu, ground, &threads);
     n.integrate += sweep.motion.kicks() as u64;

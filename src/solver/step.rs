@@ -56,6 +56,7 @@
 //! the thread pool ([`Threads`]); none knows who owns the particles.
 
 use super::contact::inside::InSolve;
+use super::contact::outline::Outlines;
 use super::contact::pairs::{PairReport, Pairs};
 use super::contact::{self, Surroundings};
 use super::forces::kernels;
@@ -84,6 +85,8 @@ pub struct Workspace {
     pub(crate) bdf2: Bdf2,
     pub(crate) vbd: Vbd,
     pub(crate) pairs: Pairs,
+    /// The bodies' outlines and the step's particle–edge candidates.
+    pub(crate) outlines: Outlines,
     /// Each particle's velocity before contact in the last step whose solve kept contact
     /// (its start velocity plus a step of its forces' acceleration), for the restitution
     /// after it; empty when the last step's solve did not.
@@ -103,6 +106,7 @@ impl Workspace {
             vbd: std::mem::take(&mut self.vbd).repacked(),
             // The lists name particles by index, which the repacking changed.
             pairs: Pairs::default(),
+            outlines: Outlines::default(),
             pre_contact: Vec::new(),
         }
     }
@@ -314,12 +318,14 @@ pub fn integrate(
 ) -> Result<(), String> {
     let (dt, g, it) = (m.dt, m.gravity, m.iterations);
     let drag = m.drag;
+    if let Some(around) = around {
+        ready_outlines(s, w, dt, around);
+    }
     let around = around.filter(|a| a.active() && m.integrator.unconditionally_stable());
     if let Some(r) = around.and(m.pair_radius) {
         // The pair lists, with a skin that covers how far two particles can close in the
-        // step: the strongest body-force acceleration and the fastest particle.
-        let accel = (s.f.iter().zip(&s.inv_mass)).fold(0.0f64, |m, (f, w)| m.max(f.length() * w));
-        w.pairs.ready_for_step(s, r, dt, accel, threads);
+        // step.
+        w.pairs.ready_for_step(s, r, dt, strongest(s), threads);
     }
     // Where each particle heads before contact: the side of a thin segment it belongs on,
     // and the approach that restitution keeps a share of after the step.
@@ -329,7 +335,10 @@ pub fn integrate(
         w.pre_contact
             .extend((0..s.x.len()).map(|i| data.0[i] + data.1[i] * (data.2[i] * dt)));
     }
-    let contact = around.and_then(|a| InSolve::new(a, Some(&w.pairs), &w.pre_contact, dt));
+    let contact = around.and_then(|a| {
+        let (pairs, outlines) = (Some(&w.pairs), Some(&w.outlines));
+        InSolve::new(a, pairs, outlines, &w.pre_contact, dt)
+    });
     let contact = contact.as_ref();
     match m.integrator {
         Integrator::ExplicitEuler | Integrator::SymplecticEuler => {
@@ -359,6 +368,23 @@ pub fn integrate(
         }
     }
     Ok(())
+}
+
+/// The strongest body-force acceleration: with the fastest particle, how far two particles
+/// can close in a step.
+fn strongest(s: &State) -> f64 {
+    (s.f.iter().zip(&s.inv_mass)).fold(0.0f64, |m, (f, w)| m.max(f.length() * w))
+}
+
+/// Lists the step's particle–outline candidates when bodies collide by their outlines, before
+/// the step moves anything (the side each particle starts on is what keeps it out): from
+/// [`integrate`], and by the adapter before the fused sweep of the Euler methods.
+pub fn ready_outlines(s: &State, w: &mut Workspace, dt: f64, around: &Surroundings) {
+    if let Some(contact) = around.outlines() {
+        let fastest = s.v.iter().fold(0.0f64, |m, v| m.max(v.length()));
+        let closing = 2.0 * (fastest * dt + strongest(s) * dt * dt);
+        w.outlines.ready(s, 1.5 * contact + 2.0 * closing);
+    }
 }
 
 /// Pass 3: v *= exp(−μ dt).
@@ -434,6 +460,15 @@ pub fn collide(
         }
         _ => PairReport::default(),
     };
+    let outlines = match around.outlines() {
+        Some(contact) => {
+            let surface = around.surface(dt, gravity);
+            let follows = integrator.unconditionally_stable().then_some(dt);
+            w.outlines
+                .collide(s, contact, surface, follows, OUTLINE_PASSES)
+        }
+        None => 0,
+    };
     let drift = contact::moves_with_drift(motion(integrator));
     let u = drift.then_some(&s.drift[..]);
     let springs = s.springs.len();
@@ -468,8 +503,13 @@ pub fn collide(
         surfaces,
         pairs: pairs.contacts,
         listed_pairs: pairs.listed,
+        outlines,
     }
 }
+
+/// Gauss–Seidel passes of the outline contact after the step, at most: it stops once the
+/// deepest contact is under 1 % of 2r.
+const OUTLINE_PASSES: usize = 8;
 
 /// What one step's contact pass resolved.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
@@ -480,12 +520,14 @@ pub struct Contacts {
     pub pairs: usize,
     /// Pairs in the neighbour lists (within 2r plus the skin).
     pub listed_pairs: usize,
+    /// Particles touching another body's outline edge ([`super::contact::outline`]).
+    pub outlines: usize,
 }
 
 impl Contacts {
     /// Every contact: surfaces and pairs.
     pub fn total(&self) -> usize {
-        self.surfaces + self.pairs
+        self.surfaces + self.pairs + self.outlines
     }
 }
 

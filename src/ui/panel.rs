@@ -389,12 +389,18 @@ pub fn side_panel(
                     let c = p.contact.as_mut().unwrap_or(&mut state.contact);
                     let hover = "particles collide with each other, in one body and between \
                                  bodies (not those joined by a spring)";
-                    if ui
-                        .checkbox(&mut c.particles, "particle pairs collide")
-                        .on_hover_text(hover)
-                        .changed()
-                        && let Some(c) = p.contact
-                    {
+                    let outline = "each particle is kept out of other bodies' outlines (their \
+                                   boundary springs, as capsules of the radius), so that \
+                                   sparse bodies cannot pass into each other";
+                    let changed = ui
+                        .horizontal(|ui| {
+                            let pairs = ui.checkbox(&mut c.particles, "pairs collide");
+                            let pairs = pairs.on_hover_text(hover).changed();
+                            let outlines = ui.checkbox(&mut c.outlines, "outlines");
+                            pairs | outlines.on_hover_text(outline).changed()
+                        })
+                        .inner;
+                    if changed && let Some(c) = p.contact {
                         state.contact = c;
                     }
                 });
@@ -441,7 +447,8 @@ pub fn side_panel(
 
             // Stability and accuracy
             stability_readout(ui, &stability, p.integrator);
-            accuracy_readout(ui, p.integrator, p.dt, solver.particle_count());
+            let particles = solver.particle_count();
+            accuracy_readout(ui, p.integrator, p.dt, particles, p.contact);
             if p.integrator == Integrator::Xpbd
                 && let Some(line) = xpbd_softness(&solver.solve_stats())
             {
@@ -699,7 +706,13 @@ fn numerical_damping_note(kept: f64) -> String {
 }
 
 /// The method's order and what the work-precision report measured at this dt.
-fn accuracy_readout(ui: &mut egui::Ui, integrator: Integrator, dt: f64, particles: usize) {
+fn accuracy_readout(
+    ui: &mut egui::Ui,
+    integrator: Integrator,
+    dt: f64,
+    particles: usize,
+    contact: Option<ContactSettings>,
+) {
     use super::predict::{Prediction, order, predict};
     // Large scenes compare best with the cloth, small ones with the oscillator.
     let class = if particles > 100 {
@@ -724,6 +737,42 @@ fn accuracy_readout(ui: &mut egui::Ui, integrator: Integrator, dt: f64, particle
     };
     ui.label("Accuracy");
     ui.small(text);
+    if let Some(contact) = contact {
+        ui.small(contact_readout(integrator, dt, contact));
+    }
+}
+
+/// What contact costs the method at this dt, read off the contact report's pile (six soft
+/// boxes in a bin), for a scene with contact.
+fn contact_readout(integrator: Integrator, dt: f64, settings: ContactSettings) -> String {
+    use super::predict::contact_cost;
+    let pairs = settings.particles;
+    let Some(row) = contact_cost(integrator, dt) else {
+        return "contact: the report measured no step near this one".to_string();
+    };
+    let frames = 1.0 / row.dt;
+    let step = if (frames - frames.round()).abs() < 1e-6 {
+        format!("1/{} s", frames.round())
+    } else {
+        format!("{:.0e} s", row.dt)
+    };
+    if !row.energy_gain.is_finite() {
+        return format!("contact: the report's pile blew up at {step}");
+    }
+    let gain = if row.energy_gain > 0.0 {
+        format!(", gained {:.0} J", row.energy_gain)
+    } else {
+        String::new()
+    };
+    let closest = if pairs {
+        format!(", pairs at {:.0} % of 2r", row.closest * 100.0)
+    } else {
+        String::new()
+    };
+    format!(
+        "contact: the report's pile at {step} costs {:.3} s per simulated s{closest}{gain}, {} of 96 cells turned",
+        row.cost, row.cells_turned
+    )
 }
 
 #[cfg(test)]

@@ -81,3 +81,67 @@ pub fn predict(scene: &str, integrator: Integrator, dt: f64) -> Prediction {
         extrapolated: true,
     }
 }
+
+const CONTACT_REPORT: &str = include_str!("../../docs/reports/contact.csv");
+
+/// What the committed contact report (docs/reports/contact.csv) measured on the pile for a
+/// method at the report's step nearest a dt (within a factor of 2).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactCost {
+    /// The report's step, s.
+    pub dt: f64,
+    /// The closest pair of particles no spring joins, as a share of 2r (0 when it blew up).
+    pub closest: f64,
+    /// The largest energy gain over the start, J (infinite when it blew up).
+    pub energy_gain: f64,
+    /// Cells turned inside out at 6 s.
+    pub cells_turned: u32,
+    /// Wall-clock seconds per simulated second, release build.
+    pub cost: f64,
+}
+
+/// The contact report's row for `integrator` nearest `dt`, if one is within a factor of 2.
+pub fn contact_cost(integrator: Integrator, dt: f64) -> Option<ContactCost> {
+    let mut best: Option<(f64, ContactCost)> = None;
+    for line in CONTACT_REPORT.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() < 10 || f[0] != integrator.cli_name() {
+            continue;
+        }
+        let row = ContactCost {
+            dt: f[1].parse().ok()?,
+            closest: f[4].parse().ok()?,
+            energy_gain: f[5].parse().ok()?,
+            cells_turned: f[8].parse().ok()?,
+            cost: f[9].parse().ok()?,
+        };
+        let distance = (row.dt / dt).ln().abs();
+        if distance <= 2f64.ln() && best.is_none_or(|(d, _)| distance < d) {
+            best = Some((distance, row));
+        }
+    }
+    best.map(|(_, row)| row)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every large-step method has a row at 1/60 s, read from the committed report.
+    #[test]
+    fn the_contact_report_has_every_large_step_method_at_a_frame() {
+        for m in [
+            Integrator::ImplicitEuler,
+            Integrator::ProjectiveDynamics,
+            Integrator::Xpbd,
+            Integrator::Vbd,
+            Integrator::Bdf2,
+        ] {
+            let row = contact_cost(m, 1.0 / 60.0).expect("a row at 1/60 s");
+            assert!((row.dt - 1.0 / 60.0).abs() < 1e-12, "{m:?}: {row:?}");
+            assert!(row.cost > 0.0 && row.closest > 0.0, "{m:?}: {row:?}");
+        }
+        // No row near 1 s.
+        assert_eq!(contact_cost(Integrator::Xpbd, 1.0), None);
+    }
+}

@@ -105,6 +105,7 @@ pub fn pairs_on(radius: f64, friction: f64) -> Option<ContactSettings> {
         friction,
         restitution: 0.0,
         particles: true,
+        outlines: false,
     })
 }
 

@@ -23,6 +23,7 @@
 //! step, which still runs and finds little left to do.
 
 use super::obstacle::Placed;
+use super::outline::Outlines;
 use super::pairs::Pairs;
 use super::pass::{Surroundings, hold, place};
 use crate::solver::state::State;
@@ -39,6 +40,9 @@ pub struct InSolve<'a> {
     dt: f64,
     /// The pair lists and the contact distance 2r, when particles collide.
     pairs: Option<(&'a Pairs, f64)>,
+    /// The outline candidates and the contact distance 2r, when bodies collide by their
+    /// outlines.
+    outlines: Option<(&'a Outlines, f64)>,
     /// Each particle's velocity before contact (its start velocity plus a step of its forces'
     /// acceleration): where it is heading, which tells the side of a thin segment it belongs
     /// on. The iterates cannot: one the solve already put on the surface heads away from it.
@@ -52,6 +56,7 @@ impl<'a> InSolve<'a> {
     pub(crate) fn new(
         around: &Surroundings<'a>,
         pairs: Option<&'a Pairs>,
+        outlines: Option<&'a Outlines>,
         heading: &'a [DVec2],
         dt: f64,
     ) -> Option<Self> {
@@ -62,9 +67,14 @@ impl<'a> InSolve<'a> {
         let pairs = pairs
             .filter(|p| settings.particles && radius > 0.0 && p.active_count() > 0)
             .map(|p| (p, 2.0 * radius));
+        let outlines = around.outlines().and_then(|contact| {
+            outlines
+                .filter(|o| o.candidates() > 0)
+                .map(|o| (o, contact))
+        });
         let ground = around.settings.and(around.ground);
         let obstacles = around.obstacles;
-        if obstacles.is_empty() && ground.is_none() && pairs.is_none() {
+        if obstacles.is_empty() && ground.is_none() && pairs.is_none() && outlines.is_none() {
             return None;
         }
         Some(InSolve {
@@ -74,13 +84,22 @@ impl<'a> InSolve<'a> {
             friction: settings.friction,
             dt,
             pairs,
+            outlines,
             heading,
         })
     }
 
-    /// Whether particle pairs are kept apart too.
+    /// The same contact without the outlines.
+    pub(crate) fn without_outlines(&self) -> Self {
+        InSolve {
+            outlines: None,
+            ..*self
+        }
+    }
+
+    /// Whether particle pairs, or particles and other bodies' outlines, are kept apart too.
     pub(crate) fn has_pairs(&self) -> bool {
-        self.pairs.is_some()
+        self.pairs.is_some() || self.outlines.is_some()
     }
 
     /// The particles with listed neighbours: the length of [`Self::separate`]'s scratch.
@@ -119,10 +138,14 @@ impl<'a> InSolve<'a> {
     }
 
     /// One Jacobi pass pushing the listed pairs apart in the iterate `x` (inverse masses `w`),
-    /// with `scratch` of [`Self::pair_scratch`]'s length.
+    /// with `scratch` of [`Self::pair_scratch`]'s length; then one Gauss–Seidel pass pushing
+    /// particles out of other bodies' outlines, back to the side each started the step on.
     pub(crate) fn separate(&self, x: &mut [DVec2], w: &[f64], scratch: &mut [DVec2]) {
         if let Some((pairs, contact)) = self.pairs {
             pairs.push_apart(x, w, contact, scratch);
+        }
+        if let Some((outlines, contact)) = self.outlines {
+            outlines.push_apart(x, w, contact, None);
         }
     }
 

@@ -10,6 +10,7 @@
 
 pub(crate) mod inside;
 pub mod obstacle;
+pub mod outline;
 pub mod pairs;
 mod pass;
 

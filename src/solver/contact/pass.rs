@@ -35,6 +35,11 @@ pub struct ContactSettings {
     /// Particles collide with each other, between bodies and within one ([`super::pairs`]).
     #[serde(default)]
     pub particles: bool,
+    /// Particles are kept out of other bodies' outlines (their boundary springs as capsules
+    /// of the radius, [`super::outline`]): bodies whose particles sit farther apart than 2r
+    /// cannot pass into each other.
+    #[serde(default)]
+    pub outlines: bool,
 }
 
 impl Default for ContactSettings {
@@ -44,6 +49,7 @@ impl Default for ContactSettings {
             friction: 0.0,
             restitution: 0.0,
             particles: false,
+            outlines: false,
         }
     }
 }
@@ -82,7 +88,17 @@ impl Surroundings<'_> {
     /// Whether the pass has anything to do.
     pub fn active(&self) -> bool {
         let pairs = self.settings.is_some_and(|s| s.particles && s.radius > 0.0);
-        !self.obstacles.is_empty() || (self.settings.is_some() && self.ground.is_some()) || pairs
+        !self.obstacles.is_empty()
+            || (self.settings.is_some() && self.ground.is_some())
+            || pairs
+            || self.outlines().is_some()
+    }
+
+    /// The contact distance 2r when bodies collide by their outlines.
+    pub(crate) fn outlines(&self) -> Option<f64> {
+        self.settings
+            .filter(|s| s.outlines && s.radius > 0.0)
+            .map(|s| 2.0 * s.radius)
     }
 
     /// The ground this pass handles: only when contact is set (else the step's own clamp does).
