@@ -325,7 +325,7 @@ pub fn integrate(
     if let Some(r) = around.and(m.pair_radius) {
         // The pair lists, with a skin that covers how far two particles can close in the
         // step.
-        w.pairs.ready_for_step(s, r, dt, strongest(s), threads);
+        w.pairs.ready_for_step(s, r, dt, threads);
     }
     // Where each particle heads before contact: the side of a thin segment it belongs on,
     // and the approach that restitution keeps a share of after the step.

@@ -130,6 +130,27 @@ pub fn closest_unjoined(solver: &Solver) -> (f64, usize, usize) {
     best
 }
 
+/// The pairs of particles that no spring joins closer than `within`: how many touch, read off
+/// the state (not off a pass's count, which depends on where the method resolved them).
+pub fn touching_unjoined(solver: &Solver, within: f64) -> usize {
+    let x = solver.x();
+    let joined: std::collections::HashSet<(u32, u32)> = solver
+        .state()
+        .springs()
+        .iter()
+        .map(|s| (s.a.min(s.b), s.a.max(s.b)))
+        .collect();
+    let mut count = 0;
+    for i in 0..x.len() {
+        for j in i + 1..x.len() {
+            if (x[i] - x[j]).length() < within && !joined.contains(&(i as u32, j as u32)) {
+                count += 1;
+            }
+        }
+    }
+    count
+}
+
 /// A strip of cloth (2 × 96 particles, 0.9 m) standing on its foot just above the ground,
 /// leaning a little so that it folds onto itself, with particle pairs on at a radius of 0.45
 /// of its spacing; and that radius.
