@@ -214,13 +214,15 @@ impl Pairs {
     /// Readies the lists for a solver that pushes pairs apart inside its own iterations
     /// (XPBD's substeps, [`Self::push_apart`]): built, if stale, with a skin that also covers
     /// how far two particles can close during the step (twice the fastest speed over dt, and
-    /// the body forces' largest acceleration over dt², each relative to the others'). Returns
-    /// whether any pair is listed.
+    /// the body forces' largest acceleration over dt², each relative to the others'). With
+    /// `per_pair`, a step that moves particles farther than the skin gets lists of its own,
+    /// each pair kept within its own relative closing. Returns whether any pair is listed.
     pub(crate) fn ready_for_step(
         &mut self,
         s: &State,
         radius: f64,
         dt: f64,
+        per_pair: bool,
         threads: &Threads,
     ) -> bool {
         let n = s.x.len();
@@ -240,12 +242,13 @@ impl Pairs {
         let accel = spread(s.f.iter().zip(&s.inv_mass).map(|(f, w)| *f * *w));
         let closing = 2.0 * (fastest * dt + accel * dt * dt);
         let base = Self::skin(radius);
-        if 2.0 * closing <= base {
-            if self.stale(s, radius, threads) || self.skin < base {
+        let skin = base + 2.0 * closing;
+        if 2.0 * closing <= base || !per_pair {
+            if self.stale(s, radius, threads) || self.skin < skin {
                 self.build(
                     &s.x,
                     radius,
-                    base,
+                    skin,
                     s.revision,
                     threads,
                     s.springs.len(),
@@ -263,7 +266,6 @@ impl Pairs {
                 dt,
                 accel: 2.0 * accel * dt * dt,
             };
-            let skin = base + 2.0 * closing;
             self.build(
                 &s.x,
                 radius,
