@@ -314,6 +314,12 @@ fn a_folding_strip_at_a_frames_step_does_not_pass_through_itself() {
     }
 }
 
+/// Every integrator at 1e-4 s, then the large-step methods at 1/60 s.
+fn every_method_then_large_steps() -> impl Iterator<Item = (Integrator, f64)> {
+    let own = Integrator::ALL.into_iter().map(|m| (m, 1e-4));
+    own.chain(LARGE_STEP.into_iter().map(|m| (m, FRAME)))
+}
+
 /// Whether `p` lies inside the closed polygon `ring` (crossing number).
 fn inside(ring: &[bevy::math::DVec2], p: bevy::math::DVec2) -> bool {
     let mut odd = false;
@@ -373,17 +379,8 @@ fn balloon(integrator: Integrator, dt: f64) -> App {
 /// ball ends a step inside the other's outline.
 #[test]
 fn the_balloons_never_enter_each_other() {
-    let all = [
-        Integrator::ExplicitEuler,
-        Integrator::SymplecticEuler,
-        Integrator::VelocityVerlet,
-        Integrator::Rk4,
-    ];
-    let runs = all
-        .iter()
-        .chain(&LARGE_STEP)
-        .map(|&m| (m, 1e-4, 3.0))
-        .chain(LARGE_STEP.iter().map(|&m| (m, FRAME, 6.0)));
+    let runs =
+        every_method_then_large_steps().map(|(m, dt)| (m, dt, if dt == FRAME { 6.0 } else { 3.0 }));
     let mut failures = vec![];
     for (m, dt, seconds) in runs {
         let mut app = balloon(m, dt);
@@ -460,17 +457,7 @@ fn ring_speeds(app: &App) -> (f64, f64) {
 /// inside the other; without outlines they pass through each other.
 #[test]
 fn two_thrown_rings_bounce_apart() {
-    let all = [
-        Integrator::ExplicitEuler,
-        Integrator::SymplecticEuler,
-        Integrator::VelocityVerlet,
-        Integrator::Rk4,
-    ];
-    let runs = all
-        .iter()
-        .chain(&LARGE_STEP)
-        .map(|&m| (m, 1e-4))
-        .chain(LARGE_STEP.iter().map(|&m| (m, FRAME)));
+    let runs = every_method_then_large_steps();
     let mut failures = vec![];
     for (m, dt) in runs {
         let mut app = thrown_rings(m, dt, true);

@@ -109,15 +109,15 @@ pub fn pairs_on(radius: f64, friction: f64) -> Option<ContactSettings> {
     })
 }
 
+/// The pairs that springs join, each as (lower index, higher).
+fn joined(solver: &Solver) -> std::collections::HashSet<(u32, u32)> {
+    let springs = solver.state().springs().iter();
+    springs.map(|s| (s.a.min(s.b), s.a.max(s.b))).collect()
+}
+
 /// The closest pair of particles that no spring joins, and its distance.
 pub fn closest_unjoined(solver: &Solver) -> (f64, usize, usize) {
-    let x = solver.x();
-    let joined: std::collections::HashSet<(u32, u32)> = solver
-        .state()
-        .springs()
-        .iter()
-        .map(|s| (s.a.min(s.b), s.a.max(s.b)))
-        .collect();
+    let (x, joined) = (solver.x(), joined(solver));
     let mut best = (f64::INFINITY, 0, 0);
     for i in 0..x.len() {
         for j in i + 1..x.len() {
@@ -133,13 +133,7 @@ pub fn closest_unjoined(solver: &Solver) -> (f64, usize, usize) {
 /// The pairs of particles that no spring joins closer than `within`: how many touch, read off
 /// the state (not off a pass's count, which depends on where the method resolved them).
 pub fn touching_unjoined(solver: &Solver, within: f64) -> usize {
-    let x = solver.x();
-    let joined: std::collections::HashSet<(u32, u32)> = solver
-        .state()
-        .springs()
-        .iter()
-        .map(|s| (s.a.min(s.b), s.a.max(s.b)))
-        .collect();
+    let (x, joined) = (solver.x(), joined(solver));
     let mut count = 0;
     for i in 0..x.len() {
         for j in i + 1..x.len() {

@@ -243,40 +243,24 @@ impl Pairs {
         let closing = 2.0 * (fastest * dt + accel * dt * dt);
         let base = Self::skin(radius);
         let skin = base + 2.0 * closing;
-        if 2.0 * closing <= base || !per_pair {
-            if self.stale(s, radius, threads) || self.skin < skin {
-                self.build(
-                    &s.x,
-                    radius,
-                    skin,
-                    s.revision,
-                    threads,
-                    s.springs.len(),
-                    None,
-                );
-            }
-        } else {
-            // A step that moves particles farther than the skin: this step's lists, each pair
-            // with what the two can close by their own relative velocity (twice it, for the
-            // solve's corrections) and the body forces' spread. Searched within the widest
-            // such reach, but short: neighbours falling together list each other only when
-            // near.
-            let motion = PairMotion {
+        // A step that moves particles farther than the skin, with `per_pair`: this step's
+        // lists, each pair with what the two can close by their own relative velocity (twice
+        // it, for the solve's corrections) and the body forces' spread. Searched within the
+        // widest such reach, but short: neighbours falling together list each other only when
+        // near.
+        let per_step = per_pair && 2.0 * closing > base;
+        if per_step || self.stale(s, radius, threads) || self.skin < skin {
+            let motion = per_step.then_some(PairMotion {
                 v: &s.v,
                 dt,
                 accel: 2.0 * accel * dt * dt,
-            };
-            self.build(
-                &s.x,
-                radius,
-                skin,
-                s.revision,
-                threads,
-                s.springs.len(),
-                Some(motion),
-            );
-            // Valid for this step only, as lists of the base skin for the pass after it.
-            self.skin = base;
+            });
+            let springs = s.springs.len();
+            self.build(&s.x, radius, skin, s.revision, threads, springs, motion);
+            if per_step {
+                // Valid for this step only, as lists of the base skin for the pass after it.
+                self.skin = base;
+            }
         }
         !self.active.is_empty()
     }
