@@ -327,16 +327,11 @@ impl Outlines {
             }
         }
         self.body = (0..n as u32).map(|i| root(&mut parent, i)).collect();
-        // Sorted spring neighbours of each particle.
-        let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n];
-        for sp in &s.springs {
-            neighbours[sp.a as usize].push(sp.b);
-            neighbours[sp.b as usize].push(sp.a);
-        }
-        for list in &mut neighbours {
-            list.sort_unstable();
-            list.dedup();
-        }
+        let (spans, adjacent) = super::pairs::spring_neighbours(s);
+        let neighbours = |i: u32| {
+            let (a, b) = spans[i as usize];
+            &adjacent[a as usize..b as usize]
+        };
         let x = &s.x;
         self.edges.clear();
         self.outward.clear();
@@ -349,7 +344,7 @@ impl Outlines {
             let (pa, pb) = (x[a as usize], x[b as usize]);
             let ab = pb - pa;
             let (mut left, mut right) = (false, false);
-            let (na, nb) = (&neighbours[a as usize], &neighbours[b as usize]);
+            let (na, nb) = (neighbours(a), neighbours(b));
             let (mut i, mut j) = (0, 0);
             while i < na.len() && j < nb.len() {
                 match na[i].cmp(&nb[j]) {

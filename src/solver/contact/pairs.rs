@@ -63,6 +63,34 @@ fn spread(vectors: impl Iterator<Item = DVec2> + Clone) -> f64 {
     vectors.fold(0.0f64, |m, v| m.max((v - centre).length()))
 }
 
+/// Each particle's spring neighbours, sorted: particle i's are `adjacent[span.0..span.1]`
+/// for `span = spans[i]` (a pair that two springs join is listed twice).
+pub(super) fn spring_neighbours(s: &State) -> (Vec<(u32, u32)>, Vec<u32>) {
+    let n = s.x.len();
+    let mut degree = vec![0u32; n + 1];
+    for sp in &s.springs {
+        degree[sp.a as usize] += 1;
+        degree[sp.b as usize] += 1;
+    }
+    let mut start = vec![0u32; n + 1];
+    for i in 0..n {
+        start[i + 1] = start[i] + degree[i];
+    }
+    let mut fill = start.clone();
+    let mut adjacent = vec![0; start[n] as usize];
+    for sp in &s.springs {
+        for (i, j) in [(sp.a, sp.b), (sp.b, sp.a)] {
+            adjacent[fill[i as usize] as usize] = j;
+            fill[i as usize] += 1;
+        }
+    }
+    let spans: Vec<(u32, u32)> = (0..n).map(|i| (start[i], start[i + 1])).collect();
+    for &(a, b) in &spans {
+        adjacent[a as usize..b as usize].sort_unstable();
+    }
+    (spans, adjacent)
+}
+
 /// Position iterations per step at most (a pile at dt = 1/60 s needs a few; at dt = 1e-4 s the
 /// first one leaves under 1 % of overlap).
 pub const MAX_ITERATIONS: usize = 32;
@@ -300,28 +328,7 @@ impl Pairs {
         if self.adjacency_for == Some(key) && self.adjacent.len() == 2 * s.springs.len() {
             return;
         }
-        let n = s.x.len();
-        let mut degree = vec![0u32; n + 1];
-        for sp in &s.springs {
-            degree[sp.a as usize] += 1;
-            degree[sp.b as usize] += 1;
-        }
-        let mut start = vec![0u32; n + 1];
-        for i in 0..n {
-            start[i + 1] = start[i] + degree[i];
-        }
-        let mut fill = start.clone();
-        self.adjacent = vec![0; start[n] as usize];
-        for sp in &s.springs {
-            for (i, j) in [(sp.a, sp.b), (sp.b, sp.a)] {
-                self.adjacent[fill[i as usize] as usize] = j;
-                fill[i as usize] += 1;
-            }
-        }
-        self.adjacency_span = (0..n).map(|i| (start[i], start[i + 1])).collect();
-        for &(a, b) in &self.adjacency_span {
-            self.adjacent[a as usize..b as usize].sort_unstable();
-        }
+        (self.adjacency_span, self.adjacent) = spring_neighbours(s);
         self.adjacency_for = Some(key);
         self.built = None;
     }
