@@ -114,8 +114,14 @@ pub fn drive(
                       "world_center": [view.world_center.x, view.world_center.y],
                       "panel_width": view.panel_width },
         });
-        // A status file that cannot be written only loses the status, never the app.
-        let _ = std::fs::write(path, format!("{line}\n"));
+        // A status file that cannot be written only loses the status, never the app. Written
+        // beside it and renamed over it, so that a reader never sees half a line (the GUI test
+        // once read a report mid-write and found no JSON).
+        let mut partial = path.clone().into_os_string();
+        partial.push(".partial");
+        if std::fs::write(&partial, format!("{line}\n")).is_ok() {
+            let _ = std::fs::rename(&partial, path);
+        }
     }
     if options.exit_after.is_some_and(|t| elapsed >= t) {
         exit.write(AppExit::Success);
