@@ -118,6 +118,23 @@ enum BenchCommand {
         #[arg(long, default_value = "docs/reports")]
         out: PathBuf,
     },
+    /// The cloth's symplectic-Euler step on the CPU and on the graphics card side by side
+    /// (256², 1024² and 2048² particles; f32, and f64 where the adapter has it; one step and
+    /// many steps a submit); writes CSV and a markdown table. Needs the `gpu` feature.
+    Gpu {
+        /// Directory to write into.
+        #[arg(long, default_value = "docs/reports")]
+        out: PathBuf,
+        /// Cloth widths (particles per side).
+        #[arg(long, value_delimiter = ',')]
+        widths: Vec<usize>,
+        /// Spring updates per figure (sets the number of steps).
+        #[arg(long, default_value_t = 2e8)]
+        budget: f64,
+        /// Runs per figure (the best is reported).
+        #[arg(long, default_value_t = 3)]
+        repeat: usize,
+    },
     /// Largest stable dt per hard scene and integrator (bisection) against the theoretical
     /// limit, and the energy change at half that dt; writes CSV and a markdown table.
     Stability {
@@ -212,6 +229,14 @@ struct RunArgs {
     /// `--profile` then times each pass.
     #[arg(long)]
     separate_passes: bool,
+    /// Where the steps run: the CPU, or the graphics card (symplectic and explicit Euler
+    /// without contact, tearing or materials; a scene that needs more runs on the CPU, and the
+    /// run says why).
+    #[arg(long, value_enum, default_value_t = runner::Device::Cpu)]
+    device: runner::Device,
+    /// The card's number width with --device gpu: f32, or f64 where the adapter has it.
+    #[arg(long, value_enum, default_value_t = runner::GpuPrecision::F32)]
+    gpu_precision: runner::GpuPrecision,
 }
 
 /// Exit codes.
@@ -239,6 +264,7 @@ fn command() -> clap::Command {
 }
 
 fn main() -> ExitCode {
+    quiet_device_select();
     let cli = match Cli::from_arg_matches(&command().get_matches()) {
         Ok(cli) => cli,
         Err(e) => e.exit(),
@@ -260,6 +286,12 @@ fn main() -> ExitCode {
         }
         Some(Command::Bench(BenchCommand::LargeSteps { out })) => large_steps(&out),
         Some(Command::Bench(BenchCommand::Contact { out })) => contact(&out),
+        Some(Command::Bench(BenchCommand::Gpu {
+            out,
+            widths,
+            budget,
+            repeat,
+        })) => gpu(&out, widths, budget, repeat),
         Some(Command::Bench(BenchCommand::Scale {
             out,
             widths,
@@ -268,6 +300,21 @@ fn main() -> ExitCode {
             repeat,
             one,
         })) => scale(&out, widths, threads, steps, repeat, one),
+    }
+}
+
+/// Outside a desktop session (no `XDG_RUNTIME_DIR`: a server, CI, a container), Mesa's Vulkan
+/// device-selection layer tries to reach a Wayland compositor when the first Vulkan instance
+/// opens and prints "error: XDG_RUNTIME_DIR is invalid" to the terminal, though nothing failed.
+/// hooke picks its adapter itself (wgpu's power preference), so the layer is switched off there
+/// by its own variable. Called first in `main`, before any thread starts: setting a variable
+/// is sound only while no other thread reads the environment.
+fn quiet_device_select() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none()
+        && std::env::var_os("NODEVICE_SELECT").is_none()
+    {
+        // SAFETY: the process has one thread here (the first statement of `main`).
+        unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
     }
 }
 
@@ -316,6 +363,8 @@ fn run(args: RunArgs) -> ExitCode {
         threads: args.threads,
         profile: args.profile,
         separate_passes: args.separate_passes,
+        device: args.device,
+        gpu_precision: args.gpu_precision,
     };
     let run = match runner::run(&loaded, &overrides, duration) {
         Ok(r) => r,
@@ -327,6 +376,9 @@ fn run(args: RunArgs) -> ExitCode {
         return fail(format!("cannot write {}: {e}", path.display()));
     }
     let r = &run.report;
+    if let Some(note) = &r.device_note {
+        eprintln!("hooke: {note}");
+    }
     if args.json {
         match serde_json::to_string(r) {
             Ok(s) => println!("{s}"),
@@ -348,6 +400,9 @@ fn run(args: RunArgs) -> ExitCode {
             },
             number(r.sim_time, 4)
         );
+        if let (Some(adapter), Some(precision)) = (&r.adapter, r.precision) {
+            println!("on the GPU: {adapter}, {precision:?}");
+        }
         println!(
             "wall {:.3} s: {:.0} steps/s, {:.2} M spring updates/s; energy {} J -> {} J",
             r.wall_s,
@@ -628,6 +683,44 @@ fn stability(out: &std::path::Path, scenes: &std::path::Path, steps: u64) -> Exi
 }
 
 /// Writes a report's files into `out` and prints the last one (its markdown).
+#[cfg(feature = "gpu")]
+fn gpu(out: &std::path::Path, widths: Vec<usize>, budget: f64, repeat: usize) -> ExitCode {
+    use hooke::bench::gpu;
+    let card = match hooke::solver::gpu::Gpu::open() {
+        Ok(c) => c,
+        Err(e) => return fail(format!("bench gpu: {e}")),
+    };
+    if !(budget.is_finite() && budget > 0.0) {
+        return fail(format!("--budget must be finite and > 0, got {budget}"));
+    }
+    let widths = if widths.is_empty() {
+        gpu::WIDTHS.to_vec()
+    } else {
+        widths
+    };
+    if let Some(w) = widths.iter().find(|&&w| !(2..=4096).contains(&w)) {
+        return fail(format!("--widths: each from 2 to 4096, got {w}"));
+    }
+    let machine = hooke::bench::machine();
+    eprintln!("hooke bench gpu on {machine} and {}", card.adapter());
+    let rows = match gpu::run(&card, &widths, budget, repeat, |w| eprintln!("  {w}")) {
+        Ok(r) => r,
+        Err(e) => return fail(e),
+    };
+    let list: Vec<String> = widths.iter().map(|w| w.to_string()).collect();
+    let command = format!(
+        "hooke bench gpu --widths {} --budget {budget:e} --repeat {repeat}",
+        list.join(",")
+    );
+    let md = gpu::markdown(&rows, &machine, &command);
+    write_report(out, &[("gpu.csv", &gpu::csv(&rows)), ("gpu.md", &md)])
+}
+
+#[cfg(not(feature = "gpu"))]
+fn gpu(_: &std::path::Path, _: Vec<usize>, _: f64, _: usize) -> ExitCode {
+    fail("bench gpu: this hooke was built without the `gpu` feature (build with `--features gpu`)")
+}
+
 fn write_report(out: &std::path::Path, files: &[(&str, &str)]) -> ExitCode {
     let written = std::fs::create_dir_all(out).and_then(|()| {
         files

@@ -97,6 +97,23 @@ fn fraction(text: &str) -> Result<f64, String> {
     }
 }
 
+/// Items in running text: "a", "a and b", "a, b and c".
+///
+/// ```
+/// assert_eq!(hooke::readable::list(&["contact", "tearing", "muscles"]), "contact, tearing and muscles");
+/// assert_eq!(hooke::readable::list(&["contact"]), "contact");
+/// ```
+pub fn list<S: AsRef<str>>(items: &[S]) -> String {
+    match items {
+        [] => String::new(),
+        [one] => one.as_ref().to_string(),
+        [rest @ .., last] => {
+            let rest: Vec<&str> = rest.iter().map(|s| s.as_ref()).collect();
+            format!("{} and {}", rest.join(", "), last.as_ref())
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::{duration, number, seconds};

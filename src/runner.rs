@@ -17,6 +17,29 @@ pub enum Duration {
     Time(f64),
 }
 
+/// Where the steps run.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Device {
+    /// The CPU, in f64: every method and feature.
+    #[default]
+    Cpu,
+    /// The graphics card (the `gpu` feature): symplectic and explicit Euler without contact,
+    /// tearing or materials; a scene that needs more runs on the CPU and the run says why.
+    Gpu,
+}
+
+/// The card's number width (`--gpu-precision`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum GpuPrecision {
+    /// f32, every card's native width.
+    #[default]
+    F32,
+    /// f64, on adapters with `SHADER_F64`.
+    F64,
+}
+
 /// Overrides applied on top of the scene.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Overrides {
@@ -60,6 +83,10 @@ pub struct Overrides {
     /// Run the particle passes as separate systems instead of one fused sweep
     /// ([`sim::ParticleSweep`]), so that `profile` times each of them.
     pub separate_passes: bool,
+    /// Where the steps run.
+    pub device: Device,
+    /// The card's number width, with `device` the GPU.
+    pub gpu_precision: GpuPrecision,
 }
 
 impl Overrides {
@@ -192,6 +219,18 @@ pub struct RunReport {
     /// The contact pass's wall time over the run (`--profile` only), s.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub contact_seconds: Option<f64>,
+    /// Where the steps ran: "cpu" or "gpu" (a scene the card does not run runs on the CPU,
+    /// and `device_note` says why).
+    pub device: Device,
+    /// The graphics adapter, when the steps ran on it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub adapter: Option<String>,
+    /// The card's number width, when the steps ran on it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub precision: Option<GpuPrecision>,
+    /// Why a run asked for on the GPU ran on the CPU.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub device_note: Option<String>,
     /// The 1-based step that produced a non-finite value, if one did. The final state (and
     /// `--out`) is then the last finite one, at the end of the tick before.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -307,8 +346,16 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
     let stability = sim::stability::estimate(world.resource::<Solver>(), &params);
 
     world.insert_resource(sim::watch::EnergyPeak::default());
+    let mut on = OnDevice::default();
+    let card = match overrides.device {
+        Device::Cpu => None,
+        Device::Gpu => gpu::card(world, overrides.gpu_precision, &mut on)?,
+    };
     let start = Instant::now();
-    let taken = sim::advance(world, steps);
+    let taken = match &card {
+        None => sim::advance(world, steps),
+        Some(card) => gpu::advance(world, card, steps)?,
+    };
     // The step's own time: the energy peak's evaluations are kept apart.
     let peak = *world.resource::<sim::watch::EnergyPeak>();
     let wall_s = (start.elapsed().as_secs_f64() - peak.seconds).max(0.0);
@@ -359,7 +406,96 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
         solve,
         pass_seconds: world.get_resource::<sim::PassTimes>().cloned(),
         contact_seconds: world.get_resource::<sim::PassTimes>().map(|t| t.contact),
+        device: on.device,
+        adapter: on.adapter,
+        precision: on.precision,
+        device_note: on.note,
         blowup_step,
     };
     Ok(Run { report, app })
+}
+
+/// Where a run's steps ran, for its report.
+#[derive(Debug, Default)]
+struct OnDevice {
+    device: Device,
+    adapter: Option<String>,
+    precision: Option<GpuPrecision>,
+    note: Option<String>,
+}
+
+/// `--device gpu`: the card, opened before the timed steps.
+#[cfg(feature = "gpu")]
+mod gpu {
+    use super::{GpuPrecision, OnDevice};
+    use crate::sim;
+    use crate::solver::gpu::{Gpu, Precision};
+    use bevy::ecs::world::World;
+
+    /// The card to run on and its precision, or `None` (with `on.note` saying why) when the
+    /// scene needs what the card does not run; an error when there is no card.
+    pub(super) fn card(
+        world: &World,
+        precision: GpuPrecision,
+        on: &mut OnDevice,
+    ) -> Result<Option<(Gpu, Precision)>, String> {
+        if let Some(why) = sim::gpu::unsupported(world) {
+            on.note = Some(format!("{why}; the steps ran on the CPU"));
+            return Ok(None);
+        }
+        let gpu = Gpu::open().map_err(|e| format!("--device gpu: {e}"))?;
+        let precision = match precision {
+            GpuPrecision::F32 => Precision::F32,
+            GpuPrecision::F64 if gpu.has_f64() => Precision::F64,
+            GpuPrecision::F64 => {
+                return Err(format!(
+                    "--gpu-precision f64: {} does not compute in f64",
+                    gpu.adapter()
+                ));
+            }
+        };
+        on.device = super::Device::Gpu;
+        on.adapter = Some(gpu.adapter());
+        on.precision = Some(match precision {
+            Precision::F32 => GpuPrecision::F32,
+            Precision::F64 => GpuPrecision::F64,
+        });
+        Ok(Some((gpu, precision)))
+    }
+
+    /// The steps on the card.
+    pub(super) fn advance(
+        world: &mut World,
+        (gpu, precision): &(Gpu, Precision),
+        steps: u64,
+    ) -> Result<u64, String> {
+        sim::gpu::advance_on_gpu(world, gpu, *precision, steps)
+    }
+}
+
+/// Without the `gpu` feature: `--device gpu` says how to get it.
+#[cfg(not(feature = "gpu"))]
+mod gpu {
+    use super::{GpuPrecision, OnDevice};
+    use bevy::ecs::world::World;
+
+    pub(super) fn card(
+        _: &World,
+        _: GpuPrecision,
+        _: &mut OnDevice,
+    ) -> Result<Option<std::convert::Infallible>, String> {
+        Err(
+            "--device gpu: this hooke was built without the `gpu` feature (build with \
+             `--features gpu`)"
+                .into(),
+        )
+    }
+
+    pub(super) fn advance(
+        _: &mut World,
+        card: &std::convert::Infallible,
+        _: u64,
+    ) -> Result<u64, String> {
+        match *card {}
+    }
 }

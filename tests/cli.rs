@@ -641,3 +641,39 @@ fn optional_fields_take_plain_values() {
         assert_eq!(run(&a), run(&b), "{field}");
     }
 }
+
+/// `--device gpu`: the same JSON, with the adapter; a scene the card does not run runs on the
+/// CPU and says why on stderr (exit 0); a bad `--device` exits 2. Where the machine has no
+/// adapter, the run exits 2 naming it (unless `HOOKE_REQUIRE_GPU` asks for one).
+#[test]
+fn run_on_the_gpu_reports_the_adapter_or_why_not() {
+    if !cfg!(feature = "gpu") {
+        let o = hooke(&["run", "--scene", "cloth32", "--steps", "10", "--device", "gpu"]);
+        assert_bad_input(&o, "without the `gpu` feature");
+        return;
+    }
+    let o = hooke(&["run", "--scene", "cloth32", "--steps", "100", "--device", "gpu", "--json"]);
+    if o.status.code() == Some(2) && std::env::var_os("HOOKE_REQUIRE_GPU").is_none() {
+        println!("skipped: {}", stderr(&o));
+        return;
+    }
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Quiet: no driver chatter on a machine without a desktop session (see `main`).
+    assert!(stderr(&o).is_empty(), "stderr: {}", stderr(&o));
+    let j = json(&o);
+    assert_eq!(j["device"], "gpu");
+    assert!(j["adapter"].as_str().is_some_and(|a| !a.is_empty()), "{j}");
+    assert_eq!(j["precision"], "f32");
+    assert_eq!(j["steps_taken"], 100);
+    assert!(j["energy_end"].as_f64().unwrap() < j["energy_start"].as_f64().unwrap());
+    // The pile has contact: on the CPU, saying so.
+    let o = hooke(&["run", "--scene", "pile", "--steps", "10", "--device", "gpu", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(json(&o)["device"], "cpu");
+    let e = stderr(&o);
+    assert!(e.contains("does not run contact") && e.contains("on the CPU"), "{e}");
+    assert_bad_input(
+        &hooke(&["run", "--scene", "cloth32", "--device", "tpu"]),
+        "--device",
+    );
+}

@@ -2,6 +2,8 @@
 
 pub mod contact;
 pub mod equilibrium;
+#[cfg(feature = "gpu")]
+pub mod gpu;
 pub mod large_steps;
 pub mod perf;
 pub mod plot;

@@ -8,6 +8,8 @@
 //! read it through [`Solver`]'s accessors.
 
 pub mod components;
+#[cfg(feature = "gpu")]
+pub mod gpu;
 pub mod grid;
 pub mod inputs;
 pub mod obstacles;

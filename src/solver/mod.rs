@@ -18,6 +18,8 @@
 //!   tree and its fill-reducing order;
 //! * [`forces`]: one spring, the scalar and AVX kernels, the threaded force pass, the particle
 //!   sweep, the stiffness blocks, and the materials ([`forces::material`]);
+//! * `gpu/` (the `gpu` feature): the explicit step as WGSL compute kernels on wgpu, beside the
+//!   floors: it reads the packed state and names no other room's machinery;
 //! * `threads/`: the pool, the pair scatter, the team and the crew, huge pages;
 //! * at the ground, the packed spring record ([`PackedSpring`]) that every floor reads.
 //!
@@ -28,6 +30,8 @@ pub mod contact;
 #[cfg(test)]
 pub(crate) mod fixtures;
 pub mod forces;
+#[cfg(feature = "gpu")]
+pub mod gpu;
 pub(crate) mod linear;
 pub mod method;
 pub(crate) mod methods;

@@ -1,0 +1,184 @@
+//! `hooke bench gpu`: the peer cloth's symplectic-Euler step on the CPU and on the graphics
+//! card side by side in one run, in million spring updates per second, with one step a submit
+//! and many steps a submit, in f32 and (where the adapter has it) f64.
+
+use super::perf;
+use crate::scene::LoadedScene;
+use crate::sim::{self, Integrator, SimParams, Solver};
+use crate::solver::gpu::{ExplicitMethod, ExplicitSettings, Gpu, GpuStep};
+use std::time::Instant;
+
+/// The cloths measured by default: 0.26 M, 4.2 M and 16.8 M springs (the issue's sizes).
+pub const WIDTHS: [usize; 3] = [256, 1024, 2048];
+
+/// One measured figure.
+#[derive(Debug, Clone)]
+pub struct Row {
+    /// Particles per side.
+    pub width: usize,
+    /// Springs.
+    pub springs: usize,
+    /// "cpu" or the adapter's name.
+    pub device: String,
+    /// "f64" on the CPU; the card's precision.
+    pub precision: &'static str,
+    /// Steps recorded into one submit (0 on the CPU).
+    pub per_submit: u64,
+    /// Steps timed.
+    pub steps: u64,
+    /// The best of the runs' wall times, s.
+    pub wall_s: f64,
+}
+
+impl Row {
+    /// Million spring updates per second.
+    pub fn rate_m(&self) -> f64 {
+        self.springs as f64 * self.steps as f64 / self.wall_s / 1e6
+    }
+    /// Microseconds per step.
+    pub fn us_per_step(&self) -> f64 {
+        self.wall_s * 1e6 / self.steps as f64
+    }
+}
+
+/// Measures each cloth: `budget` spring updates a figure (which sets the steps, at least 3),
+/// the best of `repeat` runs, the CPU on all its threads.
+pub fn run(
+    gpu: &Gpu,
+    widths: &[usize],
+    budget: f64,
+    repeat: usize,
+    mut progress: impl FnMut(&str),
+) -> Result<Vec<Row>, String> {
+    let mut rows = vec![];
+    for &w in widths {
+        progress(&format!("cloth{w}: loading"));
+        let loaded = LoadedScene::from_scene(perf::cloth(w), None).map_err(|e| e.to_string())?;
+        let mut app = crate::running_app(&loaded)?;
+        let world = app.world_mut();
+        world.resource_mut::<SimParams>().integrator = Integrator::SymplecticEuler;
+        let springs = world.resource::<Solver>().spring_count();
+        let steps = ((budget / springs as f64).round() as u64).clamp(3, 100_000);
+        progress(&format!("cloth{w}: {springs} springs, CPU, {steps} steps"));
+        sim::advance(world, 2);
+        let mut best = f64::INFINITY;
+        for _ in 0..repeat.max(1) {
+            let start = Instant::now();
+            let taken = sim::advance(world, steps);
+            if taken < steps {
+                return Err(format!("cloth{w} blew up on the CPU"));
+            }
+            best = best.min(start.elapsed().as_secs_f64());
+        }
+        rows.push(Row {
+            width: w,
+            springs,
+            device: "CPU".into(),
+            precision: "f64",
+            per_submit: 0,
+            steps,
+            wall_s: best,
+        });
+        let params = world.resource::<SimParams>().clone();
+        let settings = ExplicitSettings {
+            method: ExplicitMethod::SymplecticEuler,
+            dt: params.dt,
+            gravity: params.gravity,
+            damping: params.damping,
+            ground: params.ground,
+        };
+        for precision in gpu.precisions() {
+            let mut card =
+                GpuStep::new(gpu, &world.resource::<Solver>().state, &settings, precision)
+                    .map_err(|e| e.to_string())?;
+            card.run(3);
+            card.finish().map_err(|e| e.to_string())?;
+            for per_submit in [1, steps] {
+                progress(&format!(
+                    "cloth{w}: {}, {}, {steps} steps, {per_submit} a submit",
+                    gpu.adapter(),
+                    precision.name()
+                ));
+                let mut best = f64::INFINITY;
+                for _ in 0..repeat.max(1) {
+                    let start = Instant::now();
+                    let mut left = steps;
+                    while left > 0 {
+                        let n = left.min(per_submit);
+                        card.run(n as u32);
+                        left -= n;
+                    }
+                    card.finish().map_err(|e| e.to_string())?;
+                    best = best.min(start.elapsed().as_secs_f64());
+                }
+                rows.push(Row {
+                    width: w,
+                    springs,
+                    device: gpu.adapter(),
+                    precision: precision.name(),
+                    per_submit,
+                    steps,
+                    wall_s: best,
+                });
+            }
+        }
+    }
+    Ok(rows)
+}
+
+/// The rows as CSV.
+pub fn csv(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "width,springs,device,precision,per_submit,steps,wall_s,m_spring_updates_per_s,us_per_step\n",
+    );
+    for r in rows {
+        s += &format!(
+            "{},{},\"{}\",{},{},{},{:.6},{:.1},{:.2}\n",
+            r.width,
+            r.springs,
+            r.device,
+            r.precision,
+            r.per_submit,
+            r.steps,
+            r.wall_s,
+            r.rate_m(),
+            r.us_per_step()
+        );
+    }
+    s
+}
+
+/// The report: a table a cloth, the CPU's row first, and each card row's speed-up over it.
+pub fn markdown(rows: &[Row], machine: &str, command: &str) -> String {
+    let mut s = String::from("# The step on the graphics card\n\n");
+    s += &format!(
+        "The peer cloth (pinned top row, structural and shear springs, k = 1e4, dt = 1e-4 s, \
+         symplectic Euler) on the CPU and on the card in one run; the best of the runs. \
+         Measured on {machine} with `{command}`.\n\n"
+    );
+    s += "| cloth | springs | device | precision | steps a submit | steps | M spring updates/s | µs a step | against the CPU |\n";
+    s += "|---|---:|---|---|---:|---:|---:|---:|---:|\n";
+    for r in rows {
+        let cpu = rows
+            .iter()
+            .find(|c| c.width == r.width && c.per_submit == 0)
+            .map_or(f64::NAN, |c| c.rate_m());
+        s += &format!(
+            "| {w}² | {:.2} M | {} | {} | {} | {} | {:.0} | {:.1} | {:.2}× |\n",
+            r.springs as f64 / 1e6,
+            r.device,
+            r.precision,
+            if r.per_submit == 0 {
+                "–".to_string()
+            } else {
+                r.per_submit.to_string()
+            },
+            r.steps,
+            r.rate_m(),
+            r.us_per_step(),
+            r.rate_m() / cpu,
+            w = r.width
+        );
+    }
+    s
+}

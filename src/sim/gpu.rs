@@ -1,0 +1,117 @@
+//! The world's step on the graphics card (the `gpu` feature): what of a scene the card runs,
+//! and stepping the world's packed state there ([`advance_on_gpu`]).
+//!
+//! The card runs symplectic and explicit Euler with gravity, external forces, damping, the
+//! ground and pins ([`crate::solver::gpu`]). A scene that uses anything else stays on the CPU,
+//! and [`unsupported`] says what keeps it there, in words a user reads.
+
+use super::obstacles::Obstacles;
+use super::params::{SimClock, SimParams, SimStatus};
+use super::solver::Solver;
+use super::watch::EnergyPeak;
+use crate::solver::gpu::{ExplicitMethod, ExplicitSettings, Gpu, GpuStep, Precision};
+use crate::solver::method::Integrator;
+use bevy::ecs::world::World;
+
+/// The most steps recorded into one submit by [`advance_on_gpu`]; the state is read back (and
+/// the energy peak taken) after each.
+pub const STEPS_PER_READ: u64 = 1000;
+
+/// What in the world's scene the card does not run, as a sentence; `None` when it runs all of
+/// it. Read after the state is packed ([`super::pack`]).
+pub fn unsupported(world: &World) -> Option<String> {
+    let params = world.resource::<SimParams>();
+    let method = match params.integrator {
+        Integrator::SymplecticEuler | Integrator::ExplicitEuler => None,
+        other => Some(format!(
+            "the GPU runs symplectic and explicit Euler, not {other}"
+        )),
+    };
+    let mut what = vec![];
+    if params.contact.is_some() {
+        what.push("contact".to_string());
+    }
+    if !world.resource::<Obstacles>().placed().is_empty() {
+        what.push("obstacles".to_string());
+    }
+    if params.tear.is_some() {
+        what.push("tearing".to_string());
+    }
+    if let Some(m) = GpuStep::unsupported(&world.resource::<Solver>().state) {
+        what.push(m);
+    }
+    let materials = (!what.is_empty())
+        .then(|| format!("the GPU does not run {} yet", crate::readable::list(&what)));
+    match (method, materials) {
+        (None, None) => None,
+        (Some(a), None) | (None, Some(a)) => Some(a),
+        (Some(a), Some(b)) => Some(format!("{a}, and {b}")),
+    }
+}
+
+/// The card's step settings from the world's parameters.
+pub fn settings(params: &SimParams) -> ExplicitSettings {
+    ExplicitSettings {
+        method: match params.integrator {
+            Integrator::ExplicitEuler => ExplicitMethod::ExplicitEuler,
+            _ => ExplicitMethod::SymplecticEuler,
+        },
+        dt: params.dt,
+        gravity: params.gravity,
+        damping: params.damping,
+        ground: params.ground,
+    }
+}
+
+/// Steps the world's packed state `steps` times on `gpu` in `precision`, in submits of up to
+/// [`STEPS_PER_READ`] steps, reading it back after each: the clock advances, an
+/// [`EnergyPeak`] present takes the energy after each submit (not after every step, as on the
+/// CPU), and a non-finite state stops the run as a blow-up does on the CPU (at the end of the
+/// submit it was found in). Returns the steps taken, or why the card could not run the
+/// scene (nothing is stepped then).
+pub fn advance_on_gpu(
+    world: &mut World,
+    gpu: &Gpu,
+    precision: Precision,
+    steps: u64,
+) -> Result<u64, String> {
+    if let Some(why) = unsupported(world) {
+        return Err(why);
+    }
+    let params = world.resource::<SimParams>().clone();
+    let mut card = {
+        let solver = world.resource::<Solver>();
+        GpuStep::new(gpu, &solver.state, &settings(&params), precision)
+            .map_err(|e| e.to_string())?
+    };
+    let mut taken = 0;
+    while taken < steps {
+        let n = (steps - taken).min(STEPS_PER_READ);
+        card.run(n as u32);
+        {
+            let mut solver = world.resource_mut::<Solver>();
+            card.read_into(&mut solver.state)
+                .map_err(|e| e.to_string())?;
+        }
+        taken += n;
+        let mut clock = world.resource_mut::<SimClock>();
+        clock.steps += n;
+        clock.time += n as f64 * params.dt;
+        let clock = *clock;
+        let solver = world.resource::<Solver>();
+        let energy = solver.energy(params.gravity).total();
+        let finite = !solver.non_finite;
+        if let Some(mut peak) = world.get_resource_mut::<EnergyPeak>() {
+            peak.max = Some(peak.max.map_or(energy, |m| m.max(energy)));
+        }
+        if !finite {
+            *world.resource_mut::<SimStatus>() = SimStatus::BlewUp {
+                step: clock.steps,
+                time: clock.time,
+            };
+            world.resource_mut::<SimParams>().paused = true;
+            break;
+        }
+    }
+    Ok(taken)
+}
