@@ -648,11 +648,15 @@ fn optional_fields_take_plain_values() {
 #[test]
 fn run_on_the_gpu_reports_the_adapter_or_why_not() {
     if !cfg!(feature = "gpu") {
-        let o = hooke(&["run", "--scene", "cloth32", "--steps", "10", "--device", "gpu"]);
+        let o = hooke(&[
+            "run", "--scene", "cloth32", "--steps", "10", "--device", "gpu",
+        ]);
         assert_bad_input(&o, "without the `gpu` feature");
         return;
     }
-    let o = hooke(&["run", "--scene", "cloth32", "--steps", "100", "--device", "gpu", "--json"]);
+    let o = hooke(&[
+        "run", "--scene", "cloth32", "--steps", "100", "--device", "gpu", "--json",
+    ]);
     if o.status.code() == Some(2) && std::env::var_os("HOOKE_REQUIRE_GPU").is_none() {
         println!("skipped: {}", stderr(&o));
         return;
@@ -667,11 +671,16 @@ fn run_on_the_gpu_reports_the_adapter_or_why_not() {
     assert_eq!(j["steps_taken"], 100);
     assert!(j["energy_end"].as_f64().unwrap() < j["energy_start"].as_f64().unwrap());
     // The pile has contact: on the CPU, saying so.
-    let o = hooke(&["run", "--scene", "pile", "--steps", "10", "--device", "gpu", "--json"]);
+    let o = hooke(&[
+        "run", "--scene", "pile", "--steps", "10", "--device", "gpu", "--json",
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(json(&o)["device"], "cpu");
     let e = stderr(&o);
-    assert!(e.contains("does not run contact") && e.contains("on the CPU"), "{e}");
+    assert!(
+        e.contains("does not run contact") && e.contains("on the CPU"),
+        "{e}"
+    );
     assert_bad_input(
         &hooke(&["run", "--scene", "cloth32", "--device", "tpu"]),
         "--device",

@@ -86,11 +86,17 @@ pub fn run(
             gravity: params.gravity,
             damping: params.damping,
             ground: params.ground,
+            contact: None,
         };
         for precision in gpu.precisions() {
-            let mut card =
-                GpuStep::new(gpu, &world.resource::<Solver>().state, &settings, precision)
-                    .map_err(|e| e.to_string())?;
+            let mut card = GpuStep::new(
+                gpu,
+                &world.resource::<Solver>().state,
+                &settings,
+                &[],
+                precision,
+            )
+            .map_err(|e| e.to_string())?;
             card.run(3);
             card.finish().map_err(|e| e.to_string())?;
             for per_submit in [1, steps] {

@@ -2,7 +2,8 @@
 //! and stepping the world's packed state there ([`advance_on_gpu`]).
 //!
 //! The card runs symplectic and explicit Euler with gravity, external forces, damping, the
-//! ground and pins ([`crate::solver::gpu`]). A scene that uses anything else stays on the CPU,
+//! ground, pins, and the obstacles and the ground's contact with friction and restitution
+//! ([`crate::solver::gpu`]). A scene that uses anything else stays on the CPU,
 //! and [`unsupported`] says what keeps it there, in words a user reads.
 
 use super::obstacles::Obstacles;
@@ -28,11 +29,13 @@ pub fn unsupported(world: &World) -> Option<String> {
         )),
     };
     let mut what = vec![];
-    if params.contact.is_some() {
-        what.push("contact".to_string());
-    }
-    if !world.resource::<Obstacles>().placed().is_empty() {
-        what.push("obstacles".to_string());
+    if let Some(c) = params.contact {
+        if c.particles && c.radius > 0.0 {
+            what.push("contact between particles".to_string());
+        }
+        if c.outlines && c.radius > 0.0 {
+            what.push("contact by outlines".to_string());
+        }
     }
     if params.tear.is_some() {
         what.push("tearing".to_string());
@@ -60,6 +63,7 @@ pub fn settings(params: &SimParams) -> ExplicitSettings {
         gravity: params.gravity,
         damping: params.damping,
         ground: params.ground,
+        contact: params.contact,
     }
 }
 
@@ -79,19 +83,42 @@ pub fn advance_on_gpu(
         return Err(why);
     }
     let params = world.resource::<SimParams>().clone();
+    // The obstacles as the tick gathers them from their entities (and writes back after).
+    world
+        .run_system_cached(super::obstacles::gather_obstacles)
+        .map_err(|e| e.to_string())?;
     let mut card = {
         let solver = world.resource::<Solver>();
-        GpuStep::new(gpu, &solver.state, &settings(&params), precision)
+        let obstacles = world.resource::<Obstacles>().placed();
+        GpuStep::new(gpu, &solver.state, &settings(&params), obstacles, precision)
             .map_err(|e| e.to_string())?
     };
     let mut taken = 0;
     while taken < steps {
         let n = (steps - taken).min(STEPS_PER_READ);
+        card.place(world.resource::<Obstacles>().placed());
         card.run(n as u32);
         {
             let mut solver = world.resource_mut::<Solver>();
             card.read_into(&mut solver.state)
                 .map_err(|e| e.to_string())?;
+        }
+        let contacts = card.contacts().map_err(|e| e.to_string())?;
+        {
+            // The obstacles move on the CPU too, in f64, as the step moves them
+            // (`Placed::advance` after each step's contact pass).
+            let mut o = world.resource_mut::<Obstacles>();
+            for p in &mut o.placed {
+                if p.pose.velocity != bevy::math::DVec2::ZERO || p.pose.angular_velocity != 0.0 {
+                    for _ in 0..n {
+                        p.advance(params.dt);
+                    }
+                }
+            }
+            o.contacts = crate::solver::Contacts {
+                surfaces: contacts,
+                ..Default::default()
+            };
         }
         taken += n;
         let mut clock = world.resource_mut::<SimClock>();
@@ -113,5 +140,8 @@ pub fn advance_on_gpu(
             break;
         }
     }
+    world
+        .run_system_cached(super::obstacles::write_back_obstacles)
+        .map_err(|e| e.to_string())?;
     Ok(taken)
 }

@@ -17,6 +17,9 @@ pub enum GpuError {
     NoDevice(String),
     /// The scene is larger than a buffer on this adapter may be.
     TooLarge(String),
+    /// The device refused the kernels or the buffers (out of memory, or a kernel the
+    /// driver cannot build).
+    Refused(String),
     /// Reading the state back failed.
     ReadBack(String),
 }
@@ -27,6 +30,7 @@ impl fmt::Display for GpuError {
             GpuError::NoAdapter(why) => write!(f, "no graphics adapter: {why}"),
             GpuError::NoDevice(why) => write!(f, "the adapter gave no device: {why}"),
             GpuError::TooLarge(why) => write!(f, "the scene does not fit the adapter: {why}"),
+            GpuError::Refused(why) => write!(f, "the card refused the step: {why}"),
             GpuError::ReadBack(why) => write!(f, "reading the state back failed: {why}"),
         }
     }
@@ -135,7 +139,7 @@ impl Gpu {
 
 /// A native wgpu future's value. On native backends adapter and device requests complete at
 /// once, so a poll loop with a waker that does nothing is all the executor they need.
-fn ready<F: Future>(future: F) -> F::Output {
+pub(super) fn ready<F: Future>(future: F) -> F::Output {
     let mut future = pin!(future);
     let mut cx = Context::from_waker(Waker::noop());
     loop {

@@ -7,15 +7,21 @@
 //! its own particle's force, so no two threads write one value and no atomics are needed: a
 //! spring's length is computed twice, once per end, which costs less on a card than a scatter.
 
-use super::context::{Gpu, GpuError, Precision};
+use super::context::{Gpu, GpuError, Precision, ready};
+use crate::solver::contact::ContactSettings;
+use crate::solver::contact::obstacle::{MIN_THICKNESS, Placed, SLOP, Shape};
 use crate::solver::state::State;
 use glam::DVec2;
 use wgpu::util::DeviceExt;
 
-/// The kernel's source, in f32.
+/// The step kernel's source, in f32.
 const SOURCE: &str = include_str!("explicit.wgsl");
+/// The contact pass's kernels (`collide`, and `advance` for the obstacles), in f32.
+const CONTACT: &str = include_str!("contact.wgsl");
 /// Threads in a work group (the kernel's `@workgroup_size`).
 const GROUP: u32 = 256;
+/// Numbers in one obstacle's record (`Obstacle` in `contact.wgsl`).
+const OBSTACLE_REALS: usize = 16;
 /// The most work groups along one side of a dispatch.
 const MAX_GROUPS: u32 = 65_535;
 
@@ -41,6 +47,9 @@ pub struct ExplicitSettings {
     pub damping: f64,
     /// The ground's height, when there is one.
     pub ground: Option<f64>,
+    /// The contact settings: with them the ground is the contact pass's (at the particles'
+    /// radius, with friction and restitution), not the step's clamp.
+    pub contact: Option<ContactSettings>,
 }
 
 /// One packed state on the card, and the pipeline that steps it.
@@ -60,6 +69,24 @@ pub struct GpuStep {
     current: usize,
     dispatch: (u32, u32),
     steps: u64,
+    /// The step, s (the obstacles' turn a step is written from it).
+    dt: f64,
+    /// The contact pass, when the scene has obstacles, or a ground with contact set.
+    contact: Option<ContactPass>,
+}
+
+/// The contact pass's pipelines and buffers.
+#[derive(Debug)]
+struct ContactPass {
+    collide: wgpu::ComputePipeline,
+    advance: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+    obstacles: wgpu::Buffer,
+    count: usize,
+    counter: wgpu::Buffer,
+    /// Bind group `g` reads the start of the step from `x[g]` and places `x[1 - g]`.
+    groups: [wgpu::BindGroup; 2],
+    advance_group: wgpu::BindGroup,
 }
 
 impl GpuStep {
@@ -69,6 +96,7 @@ impl GpuStep {
         gpu: &Gpu,
         state: &State,
         settings: &ExplicitSettings,
+        obstacles: &[Placed],
         precision: Precision,
     ) -> Result<GpuStep, GpuError> {
         if precision == Precision::F64 && !gpu.has_f64() {
@@ -92,14 +120,11 @@ impl GpuStep {
             )));
         }
         let device = &gpu.device;
-        let source = match precision {
-            Precision::F32 => SOURCE.to_string(),
-            Precision::F64 => SOURCE.replace("alias real = f32;", "alias real = f64;"),
-        };
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("hooke explicit step"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
+        // What the device refuses (out of memory, a kernel its driver cannot build) comes
+        // back as an error, not as wgpu's panic.
+        let out_of_memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let invalid = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = shader(device, SOURCE, "hooke explicit step", precision);
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("hooke explicit step"),
             layout: None,
@@ -110,10 +135,14 @@ impl GpuStep {
         });
         let storage = wgpu::BufferUsages::STORAGE;
         let moving = storage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+        // A buffer is never empty (a scene without springs still binds its links): at least
+        // one vector of the widest precision.
         let init = |label: &str, contents: &[u8], usage| {
+            let mut padded = contents.to_vec();
+            padded.resize(contents.len().max(16), 0);
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
-                contents,
+                contents: &padded,
                 usage,
             })
         };
@@ -159,6 +188,10 @@ impl GpuStep {
             })
         };
         let groups = [bind(&x0, &x1), bind(&x1, &x0)];
+        let needs_contact =
+            !obstacles.is_empty() || (settings.contact.is_some() && settings.ground.is_some());
+        let contact = needs_contact
+            .then(|| ContactPass::new(gpu, precision, obstacles.len(), [&x0, &x1], &v, &w));
         let mut step = GpuStep {
             gpu: gpu.clone(),
             precision,
@@ -172,8 +205,16 @@ impl GpuStep {
             current: 0,
             dispatch,
             steps: 0,
+            dt: settings.dt,
+            contact,
         };
         step.set(settings, state.external_active);
+        step.place(obstacles);
+        for scope in [invalid, out_of_memory] {
+            if let Some(e) = ready(scope.pop()) {
+                return Err(GpuError::Refused(e.to_string()));
+            }
+        }
         Ok(step)
     }
 
@@ -198,9 +239,12 @@ impl GpuStep {
 
     /// Writes the step's settings (and whether external forces are on) to the card.
     pub fn set(&mut self, settings: &ExplicitSettings, external: bool) {
+        self.dt = settings.dt;
         let across = self.dispatch.0 * GROUP;
+        // With contact set, the ground is the contact pass's.
+        let clamp = settings.ground.is_some() && settings.contact.is_none();
         let flags = u32::from(settings.method == ExplicitMethod::ExplicitEuler)
-            | (u32::from(settings.ground.is_some()) << 1)
+            | (u32::from(clamp) << 1)
             | (u32::from(external) << 2);
         let mut bytes: Vec<u8> = [self.n, across, flags, 0]
             .iter()
@@ -222,6 +266,81 @@ impl GpuStep {
         bytes.extend(reals(&values, self.precision));
         bytes.resize(64, 0);
         self.gpu.queue.write_buffer(&self.params, 0, &bytes);
+        if let Some(c) = &self.contact {
+            let contact = settings.contact.unwrap_or_default();
+            let ground = settings.contact.and(settings.ground);
+            let mut bytes: Vec<u8> = [self.n, c.count as u32, u32::from(ground.is_some()), 0]
+                .iter()
+                .flat_map(|v| v.to_le_bytes())
+                .collect();
+            let values = [
+                settings.dt,
+                contact.radius,
+                contact.friction,
+                contact.restitution,
+                // A resting particle approaches at one step of gravity; twice that keeps it at
+                // rest (as `Surroundings::surface`).
+                2.0 * settings.gravity.length() * settings.dt,
+                ground.unwrap_or(0.0),
+                0.0,
+                0.0,
+            ];
+            bytes.extend(reals(&values, self.precision));
+            bytes.resize(96, 0);
+            self.gpu.queue.write_buffer(&c.params, 0, &bytes);
+        }
+    }
+
+    /// Writes the obstacles' shapes and poses to the card (as many as it was made with): the
+    /// caller's poses, in f64, are the truth, and the card moves its copy within a submit.
+    pub fn place(&mut self, obstacles: &[Placed]) {
+        let Some(c) = &self.contact else { return };
+        if c.count == 0 || obstacles.len() != c.count {
+            return;
+        }
+        let mut values = Vec::with_capacity(OBSTACLE_REALS * obstacles.len());
+        for o in obstacles {
+            let (kind, a, b, size) = match o.shape {
+                Shape::Circle { radius } => (0.0, DVec2::ZERO, DVec2::ZERO, radius),
+                Shape::Box { half } => (1.0, half, DVec2::ZERO, 0.0),
+                Shape::Segment { a, b, thickness } => {
+                    (2.0, a, b, thickness.max(min_thickness(self.precision)))
+                }
+            };
+            let p = &o.pose;
+            let (sin, cos) = p.angle.sin_cos();
+            let (turn_sin, turn_cos) = (p.angular_velocity * self.dt).sin_cos();
+            values.extend([
+                p.center.x,
+                p.center.y,
+                p.velocity.x,
+                p.velocity.y,
+                a.x,
+                a.y,
+                b.x,
+                b.y,
+                cos,
+                sin,
+                turn_cos,
+                turn_sin,
+                p.angular_velocity,
+                size,
+                kind,
+                0.0,
+            ]);
+        }
+        self.gpu
+            .queue
+            .write_buffer(&c.obstacles, 0, &reals(&values, self.precision));
+    }
+
+    /// Contacts resolved in the last step run (0 without a contact pass), read from the card.
+    pub fn contacts(&self) -> Result<usize, GpuError> {
+        let Some(c) = &self.contact else {
+            return Ok(0);
+        };
+        let bytes = self.read(&[(&c.counter, 4, 4)])?;
+        Ok(u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]) as usize)
     }
 
     /// Records `steps` steps in one submit, and submits it (it does not wait for the card).
@@ -240,10 +359,18 @@ impl GpuStep {
                 label: Some("hooke steps"),
                 timestamp_writes: None,
             });
-            pass.set_pipeline(&self.pipeline);
             for _ in 0..steps {
+                pass.set_pipeline(&self.pipeline);
                 pass.set_bind_group(0, &self.groups[self.current], &[]);
                 pass.dispatch_workgroups(self.dispatch.0, self.dispatch.1, 1);
+                if let Some(c) = &self.contact {
+                    pass.set_pipeline(&c.collide);
+                    pass.set_bind_group(0, &c.groups[self.current], &[]);
+                    pass.dispatch_workgroups(self.dispatch.0, self.dispatch.1, 1);
+                    pass.set_pipeline(&c.advance);
+                    pass.set_bind_group(0, &c.advance_group, &[]);
+                    pass.dispatch_workgroups((c.count as u32).div_ceil(64).max(1), 1, 1);
+                }
                 self.current = 1 - self.current;
             }
         }
@@ -265,9 +392,30 @@ impl GpuStep {
     /// positions.
     pub fn read_into(&self, state: &mut State) -> Result<(), GpuError> {
         let bytes = (self.n as u64) * 2 * self.precision.bytes() as u64;
+        let view = self.read(&[(&self.x[self.current], 0, bytes), (&self.v, 0, bytes)])?;
+        let values = from_bytes(&view, self.precision);
+        let n = self.n as usize;
+        // A pinned particle does not move on the card: it keeps its f64 position, which
+        // the f32 copy would round.
+        for (i, (x, &w)) in state.x.iter_mut().zip(&state.inv_mass).enumerate().take(n) {
+            if w != 0.0 {
+                *x = DVec2::new(values[2 * i], values[2 * i + 1]);
+            }
+        }
+        for (i, v) in state.v.iter_mut().enumerate().take(n) {
+            *v = DVec2::new(values[2 * (n + i)], values[2 * (n + i) + 1]);
+        }
+        state.non_finite = !state.state_is_finite();
+        Ok(())
+    }
+
+    /// The bytes of the buffers' ranges `(buffer, offset, length)`, one after the other,
+    /// waiting for the card.
+    fn read(&self, ranges: &[(&wgpu::Buffer, u64, u64)]) -> Result<Vec<u8>, GpuError> {
+        let total: u64 = ranges.iter().map(|r| r.2).sum();
         let staging = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("read back"),
-            size: 2 * bytes.max(8),
+            size: total.max(8).next_multiple_of(8),
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -277,9 +425,12 @@ impl GpuStep {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("read back"),
             });
-        if bytes > 0 {
-            encoder.copy_buffer_to_buffer(&self.x[self.current], 0, &staging, 0, bytes);
-            encoder.copy_buffer_to_buffer(&self.v, 0, &staging, bytes, bytes);
+        let mut at = 0;
+        for &(buffer, offset, length) in ranges {
+            if length > 0 {
+                encoder.copy_buffer_to_buffer(buffer, offset, &staging, at, length);
+            }
+            at += length;
         }
         self.gpu.queue.submit([encoder.finish()]);
         let slice = staging.slice(..);
@@ -291,24 +442,9 @@ impl GpuStep {
         rx.recv()
             .map_err(|e| GpuError::ReadBack(e.to_string()))?
             .map_err(|e| GpuError::ReadBack(e.to_string()))?;
-        {
-            let view = slice.get_mapped_range();
-            let values = from_bytes(&view, self.precision);
-            let n = self.n as usize;
-            // A pinned particle does not move on the card: it keeps its f64 position, which
-            // the f32 copy would round.
-            for (i, (x, &w)) in state.x.iter_mut().zip(&state.inv_mass).enumerate().take(n) {
-                if w != 0.0 {
-                    *x = DVec2::new(values[2 * i], values[2 * i + 1]);
-                }
-            }
-            for (i, v) in state.v.iter_mut().enumerate().take(n) {
-                *v = DVec2::new(values[2 * (n + i)], values[2 * (n + i) + 1]);
-            }
-        }
+        let bytes = slice.get_mapped_range()[..total as usize].to_vec();
         staging.unmap();
-        state.non_finite = !state.state_is_finite();
-        Ok(())
+        Ok(bytes)
     }
 
     /// Steps taken on the card since it was made.
@@ -330,6 +466,126 @@ impl GpuStep {
     pub fn adapter(&self) -> String {
         self.gpu.adapter()
     }
+}
+
+impl ContactPass {
+    fn new(
+        gpu: &Gpu,
+        precision: Precision,
+        count: usize,
+        x: [&wgpu::Buffer; 2],
+        v: &wgpu::Buffer,
+        w: &wgpu::Buffer,
+    ) -> ContactPass {
+        let device = &gpu.device;
+        let module = shader(device, CONTACT, "hooke contact", precision);
+        let pipeline = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: None,
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let (collide, advance) = (pipeline("collide"), pipeline("advance"));
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("contact settings"),
+            size: 96,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let obstacles = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("obstacles"),
+            size: (OBSTACLE_REALS * precision.bytes() * count.max(1)) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let counter = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("contacts"),
+            size: 8,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let layout = collide.get_bind_group_layout(0);
+        let bind = |from: &wgpu::Buffer, to: &wgpu::Buffer| {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("hooke contact"),
+                layout: &layout,
+                entries: &entries(&[
+                    (0, &params),
+                    (1, from),
+                    (2, to),
+                    (3, v),
+                    (4, w),
+                    (5, &obstacles),
+                    (6, &counter),
+                ]),
+            })
+        };
+        let groups = [bind(x[0], x[1]), bind(x[1], x[0])];
+        let advance_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("hooke obstacles"),
+            layout: &advance.get_bind_group_layout(0),
+            entries: &entries(&[(0, &params), (5, &obstacles), (6, &counter)]),
+        });
+        ContactPass {
+            collide,
+            advance,
+            params,
+            obstacles,
+            count,
+            counter,
+            groups,
+            advance_group,
+        }
+    }
+}
+
+/// A segment's least thickness on the card: the CPU's in f64, 1e-5 m in f32 (see
+/// `contact.wgsl`).
+fn min_thickness(precision: Precision) -> f64 {
+    match precision {
+        Precision::F32 => 1e-5,
+        Precision::F64 => MIN_THICKNESS,
+    }
+}
+
+/// Bind group entries: each buffer whole at its binding.
+fn entries<'a>(list: &[(u32, &'a wgpu::Buffer)]) -> Vec<wgpu::BindGroupEntry<'a>> {
+    list.iter()
+        .map(|&(binding, b)| wgpu::BindGroupEntry {
+            binding,
+            resource: b.as_entire_binding(),
+        })
+        .collect()
+}
+
+/// A kernel's module, its `real` alias set to the precision.
+fn shader(
+    device: &wgpu::Device,
+    source: &str,
+    label: &str,
+    precision: Precision,
+) -> wgpu::ShaderModule {
+    let source = match precision {
+        Precision::F32 => source.to_string(),
+        Precision::F64 => source
+            .replace("alias real = f32;", "alias real = f64;")
+            .replace(
+                "const MIN_THICKNESS: real = 1e-5;",
+                &format!("const MIN_THICKNESS: real = {MIN_THICKNESS:e};"),
+            )
+            .replace(
+                "const SLOP: real = 1e-6;",
+                &format!("const SLOP: real = {SLOP:e};"),
+            ),
+    };
+    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    })
 }
 
 /// Each particle's links: where each particle's list starts (n + 1 values), each link's other

@@ -1,0 +1,389 @@
+// The contact pass of one particle on the card (src/solver/contact/pass.rs, `collide`): after
+// the step, a free particle that ended within its radius of an obstacle (or of the ground,
+// when contact is set) is put back on the surface, after a swept test of its path so that it
+// cannot pass through a thin one, and its velocity relative to the surface loses its approach
+// (keeping the restitution's share) and up to μ times that of its sliding. The obstacles'
+// shapes, distances and swept tests are src/solver/contact/obstacle.rs's, line for line.
+//
+// `real` is f32, or f64 where the adapter has it (the host rewrites the alias).
+
+alias real = f32;
+
+// A segment's least thickness, and how far from a surface a particle still touches it. In f32
+// these are wider than the CPU's (1e-6 and 1e-9 m, which the host writes here for f64): f32
+// resolves 6e-8 m at 1 m, so a particle the last step left on a surface sits a few units of
+// that off it, and a slop under that lets it miss the touch that stops it (a box held by
+// friction on a slope then crept down it).
+const MIN_THICKNESS: real = 1e-5;
+const SLOP: real = 1e-6;
+const NONE: real = -1.0;
+
+struct Params {
+    n: u32,
+    obstacles: u32,
+    // Bit 0: the ground is this pass's (contact is set and the scene has a ground).
+    flags: u32,
+    pad: u32,
+    dt: real,
+    radius: real,
+    friction: real,
+    restitution: real,
+    // Below this approach speed an impact keeps nothing.
+    rest_speed: real,
+    ground: real,
+    spare0: real,
+    spare1: real,
+}
+
+// kind: 0 a circle (size: its radius), 1 a box (a: its half-extents), 2 a segment from a to b
+// (size: its thickness, at least MIN_THICKNESS). Its rotation is kept as (cos, sin), and turned
+// each step by (cos, sin) of ω dt, both from the host: Vulkan's sine and cosine take no f64.
+struct Obstacle {
+    center: vec2<real>,
+    velocity: vec2<real>,
+    a: vec2<real>,
+    b: vec2<real>,
+    rotation: vec2<real>,
+    turn: vec2<real>,
+    angular_velocity: real,
+    size: real,
+    kind: real,
+    spare: real,
+}
+
+@group(0) @binding(0) var<uniform> p: Params;
+@group(0) @binding(1) var<storage, read> x_start: array<vec2<real>>;
+@group(0) @binding(2) var<storage, read_write> x_end: array<vec2<real>>;
+@group(0) @binding(3) var<storage, read_write> v: array<vec2<real>>;
+@group(0) @binding(4) var<storage, read> inv_mass: array<real>;
+@group(0) @binding(5) var<storage, read_write> obstacles: array<Obstacle>;
+// [0]: contacts this step so far; [1]: the last step's.
+@group(0) @binding(6) var<storage, read_write> counter: array<atomic<u32>, 2>;
+
+fn is_circle(o: Obstacle) -> bool { return o.kind < 0.5; }
+fn is_box(o: Obstacle) -> bool { return o.kind > 0.5 && o.kind < 1.5; }
+fn is_segment(o: Obstacle) -> bool { return o.kind > 1.5; }
+
+fn perp(v: vec2<real>) -> vec2<real> { return vec2<real>(-v.y, v.x); }
+
+// glam's signum: 1 for +0.
+fn signum(x: real) -> real { return select(real(-1.0), real(1.0), x >= real(0.0)); }
+
+// d turned by the rotation (c, s).
+fn rotate(d: vec2<real>, cs: vec2<real>) -> vec2<real> {
+    return vec2<real>(cs.x * d.x - cs.y * d.y, cs.y * d.x + cs.x * d.y);
+}
+
+fn unturned(o: Obstacle) -> bool {
+    return (o.rotation.x == real(1.0) && o.rotation.y == real(0.0)) || is_circle(o);
+}
+
+fn local(o: Obstacle, q: vec2<real>) -> vec2<real> {
+    let d = q - o.center;
+    if (unturned(o)) { return d; }
+    return rotate(d, vec2<real>(o.rotation.x, -o.rotation.y));
+}
+
+fn world_direction(o: Obstacle, d: vec2<real>) -> vec2<real> {
+    if (unturned(o)) { return d; }
+    return rotate(d, o.rotation);
+}
+
+fn bound(o: Obstacle) -> real {
+    if (is_circle(o)) { return o.size; }
+    if (is_box(o)) { return length(o.a); }
+    return max(length(o.a), length(o.b)) + o.size;
+}
+
+struct Distance {
+    d: real,
+    n: vec2<real>,
+}
+
+fn box_distance(q: vec2<real>, half: vec2<real>) -> Distance {
+    let d = abs(q) - half;
+    let outside = max(d, vec2<real>(0.0, 0.0));
+    if (dot(outside, outside) > real(0.0)) {
+        let n = normalize(outside * vec2<real>(signum(q.x), signum(q.y)));
+        return Distance(length(outside), n);
+    }
+    if (d.x > d.y) {
+        return Distance(d.x, vec2<real>(signum(q.x), 0.0));
+    }
+    return Distance(d.y, vec2<real>(0.0, signum(q.y)));
+}
+
+fn distance_to(o: Obstacle, at: vec2<real>) -> Distance {
+    let q = local(o, at);
+    var r: Distance;
+    if (is_circle(o)) {
+        let l = length(q);
+        var n = vec2<real>(0.0, 1.0);
+        if (l > real(0.0)) { n = q / l; }
+        r = Distance(l - o.size, n);
+    } else if (is_box(o)) {
+        r = box_distance(q, o.a);
+    } else {
+        let ab = o.b - o.a;
+        let len2 = dot(ab, ab);
+        var t = real(0.0);
+        if (len2 > real(0.0)) { t = clamp(dot(q - o.a, ab) / len2, real(0.0), real(1.0)); }
+        let d = q - (o.a + ab * t);
+        let l = length(d);
+        var n = vec2<real>(0.0, 1.0);
+        if (l > real(1e-9)) {
+            n = d / l;
+        } else if (dot(ab, ab) > real(0.0)) {
+            n = normalize(perp(ab));
+        }
+        r = Distance(l - o.size, n);
+    }
+    r.n = world_direction(o, r.n);
+    return r;
+}
+
+struct Touch {
+    hit: bool,
+    depth: real,
+    normal: vec2<real>,
+}
+
+fn touch(o: Obstacle, at: vec2<real>, start: vec2<real>, heading: vec2<real>, r: real) -> Touch {
+    let dn = distance_to(o, at);
+    if (dn.d >= r + SLOP) {
+        return Touch(false, 0.0, vec2<real>(0.0, 0.0));
+    }
+    var depth = max(r - dn.d, real(0.0));
+    var normal = dn.n;
+    if (is_segment(o)) {
+        let core = at - normal * (dn.d + o.size);
+        let side_from = dot(start - core, normal);
+        let off_line = length(at - core);
+        var flip = false;
+        if (abs(side_from) > real(0.5) * MIN_THICKNESS) {
+            flip = side_from < real(0.0);
+        } else {
+            flip = off_line < real(0.5) * MIN_THICKNESS && dot(heading, normal) > real(0.0);
+        }
+        if (flip) {
+            normal = -normal;
+            depth = r + real(2.0) * o.size + dn.d;
+        }
+    }
+    return Touch(true, depth, normal);
+}
+
+fn hit_normal(o: Obstacle, at: vec2<real>, step: vec2<real>) -> vec2<real> {
+    let n = distance_to(o, at).n;
+    if (dot(n, step) > real(0.0)) { return -n; }
+    return n;
+}
+
+fn velocity_at(o: Obstacle, at: vec2<real>) -> vec2<real> {
+    return o.velocity + o.angular_velocity * perp(at - o.center);
+}
+
+fn in_unit(t: real) -> bool { return t >= real(0.0) && t <= real(1.0); }
+
+fn line_crossing(p0: vec2<real>, p1: vec2<real>, a: vec2<real>, b: vec2<real>) -> real {
+    let ab = b - a;
+    let len = length(ab);
+    if (len == real(0.0)) { return NONE; }
+    let n = perp(ab) / len;
+    let s0 = dot(p0 - a, n);
+    let s1 = dot(p1 - a, n);
+    let half = real(0.5) * MIN_THICKNESS;
+    var t = real(0.0);
+    if (abs(s0) < half) {
+        if (abs(s1) < half) { return NONE; }
+    } else if ((s0 > real(0.0)) != (s1 > real(0.0))) {
+        t = s0 / (s0 - s1);
+    } else {
+        return NONE;
+    }
+    let along = dot(p0 + (p1 - p0) * t - a, ab) / (len * len);
+    if (in_unit(along)) { return t; }
+    return NONE;
+}
+
+fn ray_circle(p0: vec2<real>, p1: vec2<real>, c: vec2<real>, radius: real) -> real {
+    let d = p1 - p0;
+    let m = p0 - c;
+    let a = dot(d, d);
+    if (a == real(0.0)) { return NONE; }
+    let b = dot(m, d);
+    let cc = dot(m, m) - radius * radius;
+    let disc = b * b - a * cc;
+    if (disc < real(0.0)) { return NONE; }
+    let t = (-b - sqrt(disc)) / a;
+    if (in_unit(t)) { return t; }
+    return NONE;
+}
+
+fn keep(best: real, t: real) -> real {
+    if (t < real(0.0)) { return best; }
+    if (best < real(0.0)) { return t; }
+    return min(best, t);
+}
+
+fn ray_capsule(p0: vec2<real>, p1: vec2<real>, a: vec2<real>, b: vec2<real>, radius: real) -> real {
+    let ab = b - a;
+    var best = NONE;
+    best = keep(best, ray_circle(p0, p1, a, radius));
+    best = keep(best, ray_circle(p0, p1, b, radius));
+    let len = length(ab);
+    if (len > real(0.0)) {
+        let n = perp(ab) / len;
+        let d = p1 - p0;
+        for (var k = 0; k < 2; k++) {
+            let side = select(-radius, radius, k == 0);
+            let s0 = dot(p0 - a, n) - side;
+            let s1 = dot(p1 - a, n) - side;
+            if (signum(s0) == signum(s1) || s0 == s1) { continue; }
+            let t = s0 / (s0 - s1);
+            let hit = p0 + d * t;
+            let along = dot(hit - a, ab) / (len * len);
+            if (in_unit(along) && in_unit(t)) { best = keep(best, t); }
+        }
+    }
+    return best;
+}
+
+fn ray_rounded_box(p0: vec2<real>, p1: vec2<real>, half: vec2<real>, r: real) -> real {
+    var corners = array<vec2<real>, 4>(
+        vec2<real>(-half.x, -half.y),
+        vec2<real>(half.x, -half.y),
+        vec2<real>(half.x, half.y),
+        vec2<real>(-half.x, half.y),
+    );
+    var best = NONE;
+    for (var k = 0; k < 4; k++) {
+        best = keep(best, ray_capsule(p0, p1, corners[k], corners[(k + 1) % 4], r));
+    }
+    return best;
+}
+
+fn first_hit(o: Obstacle, start: vec2<real>, to: vec2<real>, r: real) -> real {
+    let p0 = local(o, start);
+    let p1 = local(o, to);
+    if (distance_to(o, start).d < r + real(0.5) * MIN_THICKNESS) {
+        if (is_segment(o)) { return line_crossing(p0, p1, o.a, o.b); }
+        return NONE;
+    }
+    if (is_circle(o)) { return ray_circle(p0, p1, vec2<real>(0.0, 0.0), o.size + r); }
+    if (is_segment(o)) { return ray_capsule(p0, p1, o.a, o.b, o.size + r); }
+    return ray_rounded_box(p0, p1, o.a, r);
+}
+
+fn respond(vel: vec2<real>, surface_velocity: vec2<real>, normal: vec2<real>) -> vec2<real> {
+    let rel = vel - surface_velocity;
+    let vn = dot(rel, normal);
+    if (vn >= real(0.0)) { return vel; }
+    var kept = real(0.0);
+    if (-vn > p.rest_speed) { kept = -vn * p.restitution; }
+    let dvn = kept - vn;
+    var vt = rel - normal * vn;
+    let speed_t = length(vt);
+    if (speed_t > p.friction * dvn) {
+        vt = vt * (real(1.0) - p.friction * dvn / speed_t);
+    } else {
+        vt = vec2<real>(0.0, 0.0);
+    }
+    return surface_velocity + normal * kept + vt;
+}
+
+fn hold(at: vec2<real>, start: vec2<real>, shift: vec2<real>, n: vec2<real>, depth: real) -> vec2<real> {
+    let moved = at - start - shift;
+    let sliding = moved - n * dot(moved, n);
+    let l = length(sliding);
+    let limit = p.friction * depth;
+    if (l <= limit) { return at - sliding; }
+    if (l > real(0.0)) { return at - sliding * (limit / l); }
+    return at;
+}
+
+fn near(o: Obstacle, at: vec2<real>, r: real, travel: real) -> bool {
+    return length(at - o.center) <= bound(o) + r + travel + real(2.0) * SLOP;
+}
+
+@compute @workgroup_size(256)
+fn collide(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = id.x + id.y * groups.x * 256u;
+    if (i >= p.n || inv_mass[i] == real(0.0)) {
+        return;
+    }
+    var x = x_end[i];
+    var vel = v[i];
+    let start = x_start[i];
+    var heading = vel;
+    if (any(x != start)) { heading = x - start; }
+    let r = p.radius;
+    let travel = length(x - start);
+    var contacts = 0u;
+    var best_t = real(2.0);
+    var best = 0u;
+    for (var k = 0u; k < p.obstacles; k++) {
+        let o = obstacles[k];
+        if (!near(o, x, r, travel)) { continue; }
+        let t = first_hit(o, start, x, r);
+        if (t >= real(0.0) && t < best_t) {
+            best_t = t;
+            best = k;
+        }
+    }
+    if (best_t <= real(1.0)) {
+        let o = obstacles[best];
+        let step = x - start;
+        let hit = start + step * best_t;
+        let n = hit_normal(o, hit, heading);
+        let rest = step * (real(1.0) - best_t);
+        let into = max(-dot(rest, n), real(0.0));
+        x = hit + rest + n * into;
+        let sv = velocity_at(o, x);
+        x = hold(x, start, sv * p.dt, n, into);
+        vel = respond(vel, sv, n);
+        contacts++;
+    }
+    for (var k = 0u; k < p.obstacles; k++) {
+        let o = obstacles[k];
+        if (!near(o, x, r, travel)) { continue; }
+        let t = touch(o, x, start, heading, r);
+        if (t.hit) {
+            x += t.normal * t.depth;
+            let sv = velocity_at(o, x);
+            x = hold(x, start, sv * p.dt, t.normal, t.depth);
+            vel = respond(vel, sv, t.normal);
+            contacts++;
+        }
+    }
+    if ((p.flags & 1u) != 0u && x.y < p.ground + r + SLOP) {
+        let depth = max(p.ground + r - x.y, real(0.0));
+        x.y = max(x.y, p.ground + r);
+        let up = vec2<real>(0.0, 1.0);
+        x = hold(x, start, vec2<real>(0.0, 0.0), up, depth);
+        vel = respond(vel, vec2<real>(0.0, 0.0), up);
+        contacts++;
+    }
+    x_end[i] = x;
+    v[i] = vel;
+    if (contacts > 0u) {
+        atomicAdd(&counter[0], contacts);
+    }
+}
+
+// After each step's contact: the obstacles move by their velocities (kinematic bodies), and
+// the step's contact count is kept as the last step's.
+@compute @workgroup_size(64)
+fn advance(@builtin(global_invocation_id) id: vec3<u32>) {
+    let k = id.x;
+    if (k == 0u) {
+        atomicStore(&counter[1], atomicLoad(&counter[0]));
+        atomicStore(&counter[0], 0u);
+    }
+    if (k < p.obstacles) {
+        obstacles[k].center += obstacles[k].velocity * p.dt;
+        if (obstacles[k].angular_velocity != real(0.0)) {
+            obstacles[k].rotation = rotate(obstacles[k].rotation, obstacles[k].turn);
+        }
+    }
+}
