@@ -24,8 +24,9 @@ pub enum Device {
     /// The CPU, in f64: every method and feature.
     #[default]
     Cpu,
-    /// The graphics card (the `gpu` feature): symplectic and explicit Euler without contact,
-    /// tearing or materials; a scene that needs more runs on the CPU and the run says why.
+    /// The graphics card (the `gpu` feature): symplectic and explicit Euler with obstacles, the
+    /// ground's contact and dashpots; a scene that needs more (contact between particles,
+    /// tearing, pressure, muscles, plasticity) runs on the CPU and the run says why.
     Gpu,
 }
 

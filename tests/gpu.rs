@@ -131,7 +131,7 @@ fn difference(cpu: &bevy::app::App, card: &bevy::app::App) -> f64 {
 /// card's contact pass at once (the swept test, a turned box, a moving surface, the ground's
 /// contact).
 fn swept_grid(integrator: Integrator) -> bevy::app::App {
-    let mut scene = common::bare_scene(integrator, 1e-4);
+    let mut scene = bare_scene(integrator, 1e-4);
     scene.damping = 0.5;
     scene.ground = Some(0.0);
     scene.generate = vec![hooke::scene::Generator::Grid {
@@ -258,4 +258,73 @@ fn obstacles_on_the_card_match_the_cpu() {
             .collect::<Vec<_>>()
     };
     assert_eq!(pose(&mut a), pose(&mut b));
+}
+
+/// Dashpots on the card: the shipped soft box with a dashpot of 2 N·s/m on every spring, 0.5 s,
+/// against the CPU's f64 (in f64 to 1e-12 m, in f32 to 0.1 mm), where the dashpots move the
+/// box by a centimetre.
+#[test]
+fn dashpots_on_the_card_match_the_cpu() {
+    let Some(gpu) = card() else { return };
+    let soft_box = |c: f64| {
+        let mut s = presets::resolve("soft_box").unwrap().scene.clone();
+        s.integrator = Integrator::SymplecticEuler;
+        s.spring_damping = c;
+        app_with(s)
+    };
+    let mut cpu = soft_box(2.0);
+    step(&mut cpu, 5000);
+    let mut undamped = soft_box(0.0);
+    step(&mut undamped, 5000);
+    let effect = difference(&cpu, &undamped);
+    assert!(
+        effect > 1e-3,
+        "the dashpots moved the box by only {effect} m"
+    );
+    for precision in gpu.precisions() {
+        let mut on_card = soft_box(2.0);
+        sim::gpu::advance_on_gpu(on_card.world_mut(), &gpu, precision, 5000).unwrap();
+        let d = difference(&cpu, &on_card);
+        println!("{precision:?}: {d:e} m off the CPU (the dashpots' effect {effect:e} m)");
+        let tolerance = match precision {
+            Precision::F32 => 1e-4,
+            Precision::F64 => 1e-12,
+        };
+        assert!(d < tolerance, "{precision:?}: {d} m off the CPU");
+    }
+}
+
+/// CPU → card → CPU in the middle of a run loses nothing: the grid swept by a moving, turning
+/// box, 700 steps on the CPU, 700 on the card in f64, 700 on the CPU again, ends where 2100 on
+/// the CPU end (to 1e-9 m), with the same clock and the box at the same pose.
+#[test]
+fn switching_to_the_card_and_back_loses_nothing() {
+    let Some(gpu) = card() else { return };
+    if !gpu.has_f64() {
+        println!("skipped: {} has no f64", gpu.adapter());
+        return;
+    }
+    let mut straight = swept_grid(Integrator::SymplecticEuler);
+    step(&mut straight, 2100);
+    let mut switched = swept_grid(Integrator::SymplecticEuler);
+    step(&mut switched, 700);
+    sim::gpu::advance_on_gpu(switched.world_mut(), &gpu, Precision::F64, 700).unwrap();
+    step(&mut switched, 700);
+    let d = difference(&straight, &switched);
+    println!("{d:e} m");
+    assert!(
+        d < 1e-9,
+        "a particle is {d} m off the run that stayed on the CPU"
+    );
+    let clock = |app: &bevy::app::App| *app.world().resource::<SimClock>();
+    assert_eq!(clock(&straight).steps, clock(&switched).steps);
+    assert!((clock(&straight).time - clock(&switched).time).abs() < 1e-12);
+    let poses = |app: &mut bevy::app::App| {
+        let world = app.world_mut();
+        let mut q = world.query::<&hooke::sim::ObstaclePose>();
+        q.iter(world)
+            .map(|p| (p.center, p.angle))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(poses(&mut straight), poses(&mut switched));
 }

@@ -2,8 +2,8 @@
 //! and stepping the world's packed state there ([`advance_on_gpu`]).
 //!
 //! The card runs symplectic and explicit Euler with gravity, external forces, damping, the
-//! ground, pins, and the obstacles and the ground's contact with friction and restitution
-//! ([`crate::solver::gpu`]). A scene that uses anything else stays on the CPU,
+//! ground, pins, dashpots, and the obstacles and the ground's contact with friction and
+//! restitution ([`crate::solver::gpu`]). A scene that uses anything else stays on the CPU,
 //! and [`unsupported`] says what keeps it there, in words a user reads.
 
 use super::obstacles::Obstacles;

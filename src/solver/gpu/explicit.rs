@@ -63,7 +63,8 @@ pub struct GpuStep {
     params: wgpu::Buffer,
     /// Positions, ping-ponged: `x[current]` holds the state.
     x: [wgpu::Buffer; 2],
-    v: wgpu::Buffer,
+    /// Velocities, ping-ponged with the positions.
+    v: [wgpu::Buffer; 2],
     /// Bind group `g` reads `x[g]` and writes `x[1 - g]`.
     groups: [wgpu::BindGroup; 2],
     current: usize,
@@ -106,7 +107,8 @@ impl GpuStep {
             )));
         }
         let n = state.particle_count();
-        let (starts, others, ks) = links(state);
+        let dashpots = state.materials.has_dashpots();
+        let (starts, others, records) = links(state);
         let limits = gpu.device.limits();
         let widest = (others.len().max(n) * 2 * precision.bytes()) as u64;
         if widest > limits.max_storage_buffer_binding_size
@@ -124,7 +126,18 @@ impl GpuStep {
         // back as an error, not as wgpu's panic.
         let out_of_memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let invalid = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = shader(device, SOURCE, "hooke explicit step", precision);
+        let source = if dashpots {
+            SOURCE
+                .replace("alias Link = vec2<real>;", "alias Link = vec4<real>;")
+                .replace("const DASHPOTS: bool = false;", "const DASHPOTS: bool = true;")
+                .replace(
+                    "fn dashpot(s: Link, dv: vec2<real>, n: vec2<real>) -> real {\n    return real(0.0);",
+                    "fn dashpot(s: Link, dv: vec2<real>, n: vec2<real>) -> real {\n    return s.z * dot(dv, n);",
+                )
+        } else {
+            SOURCE.to_string()
+        };
+        let module = shader(device, &source, "hooke explicit step", precision);
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("hooke explicit step"),
             layout: None,
@@ -148,13 +161,17 @@ impl GpuStep {
         };
         let x0 = init("x", &vectors(&state.x, precision), moving);
         let x1 = init("x'", &vectors(&state.x, precision), moving);
-        let v = init("v", &vectors(&state.v, precision), moving);
+        let v0 = init("v", &vectors(&state.v, precision), moving);
+        let v1 = init("v'", &vectors(&state.v, precision), moving);
         let w = init("1/m", &reals(&state.inv_mass, precision), storage);
         let mut index = starts;
         index.extend_from_slice(&others);
         let link_bytes: Vec<u8> = index.iter().flat_map(|i| i.to_le_bytes()).collect();
         let links = init("links", &link_bytes, storage);
-        let spring = init("springs", &pairs(&ks, precision), storage);
+        // (k, L) a link, or (k, L, c, 0) with dashpots.
+        let width = if dashpots { 4 } else { 2 };
+        let flat: Vec<f64> = records.iter().flat_map(|r| r[..width].to_vec()).collect();
+        let spring = init("springs", &reals(&flat, precision), storage);
         let external = if state.external_active {
             vectors(&state.external, precision)
         } else {
@@ -171,27 +188,30 @@ impl GpuStep {
         let across = groups_needed.min(MAX_GROUPS);
         let dispatch = (across, groups_needed.div_ceil(across));
         let layout = pipeline.get_bind_group_layout(0);
-        let bind = |from: &wgpu::Buffer, to: &wgpu::Buffer| {
-            let entries = [&params, from, to, &v, &w, &links, &spring, &external];
-            let entries: Vec<wgpu::BindGroupEntry> = entries
-                .iter()
-                .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry {
-                    binding: i as u32,
-                    resource: b.as_entire_binding(),
-                })
-                .collect();
+        let bind = |from: usize| {
+            let (x, v) = ([&x0, &x1], [&v0, &v1]);
+            let to = 1 - from;
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("hooke explicit step"),
                 layout: &layout,
-                entries: &entries,
+                entries: &entries(&[
+                    (0, &params),
+                    (1, x[from]),
+                    (2, x[to]),
+                    (3, v[from]),
+                    (4, v[to]),
+                    (5, &w),
+                    (6, &links),
+                    (7, &spring),
+                    (8, &external),
+                ]),
             })
         };
-        let groups = [bind(&x0, &x1), bind(&x1, &x0)];
+        let groups = [bind(0), bind(1)];
         let needs_contact =
             !obstacles.is_empty() || (settings.contact.is_some() && settings.ground.is_some());
         let contact = needs_contact
-            .then(|| ContactPass::new(gpu, precision, obstacles.len(), [&x0, &x1], &v, &w));
+            .then(|| ContactPass::new(gpu, precision, obstacles.len(), [&x0, &x1], [&v0, &v1], &w));
         let mut step = GpuStep {
             gpu: gpu.clone(),
             precision,
@@ -200,7 +220,7 @@ impl GpuStep {
             pipeline,
             params,
             x: [x0, x1],
-            v,
+            v: [v0, v1],
             groups,
             current: 0,
             dispatch,
@@ -222,9 +242,6 @@ impl GpuStep {
     /// all of it.
     pub fn unsupported(state: &State) -> Option<String> {
         let m = &state.materials;
-        if m.has_dashpots() {
-            return Some("dashpots".into());
-        }
         if !m.gas.is_empty() {
             return Some("pressure bodies".into());
         }
@@ -392,7 +409,10 @@ impl GpuStep {
     /// positions.
     pub fn read_into(&self, state: &mut State) -> Result<(), GpuError> {
         let bytes = (self.n as u64) * 2 * self.precision.bytes() as u64;
-        let view = self.read(&[(&self.x[self.current], 0, bytes), (&self.v, 0, bytes)])?;
+        let view = self.read(&[
+            (&self.x[self.current], 0, bytes),
+            (&self.v[self.current], 0, bytes),
+        ])?;
         let values = from_bytes(&view, self.precision);
         let n = self.n as usize;
         // A pinned particle does not move on the card: it keeps its f64 position, which
@@ -474,7 +494,7 @@ impl ContactPass {
         precision: Precision,
         count: usize,
         x: [&wgpu::Buffer; 2],
-        v: &wgpu::Buffer,
+        v: [&wgpu::Buffer; 2],
         w: &wgpu::Buffer,
     ) -> ContactPass {
         let device = &gpu.device;
@@ -509,22 +529,25 @@ impl ContactPass {
             mapped_at_creation: false,
         });
         let layout = collide.get_bind_group_layout(0);
-        let bind = |from: &wgpu::Buffer, to: &wgpu::Buffer| {
+        // After the step that read `x[from]`: the start positions, and the end positions and
+        // velocities it wrote.
+        let bind = |from: usize| {
+            let to = 1 - from;
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("hooke contact"),
                 layout: &layout,
                 entries: &entries(&[
                     (0, &params),
-                    (1, from),
-                    (2, to),
-                    (3, v),
+                    (1, x[from]),
+                    (2, x[to]),
+                    (3, v[to]),
                     (4, w),
                     (5, &obstacles),
                     (6, &counter),
                 ]),
             })
         };
-        let groups = [bind(x[0], x[1]), bind(x[1], x[0])];
+        let groups = [bind(0), bind(1)];
         let advance_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("hooke obstacles"),
             layout: &advance.get_bind_group_layout(0),
@@ -589,8 +612,9 @@ fn shader(
 }
 
 /// Each particle's links: where each particle's list starts (n + 1 values), each link's other
-/// end, and each link's (k, L), from the packed springs by a counting sort.
-fn links(state: &State) -> (Vec<u32>, Vec<u32>, Vec<(f64, f64)>) {
+/// end, and each link's (k, L, c, 0) (c its dashpot, 0 without), from the packed springs by a
+/// counting sort.
+fn links(state: &State) -> (Vec<u32>, Vec<u32>, Vec<[f64; 4]>) {
     let n = state.particle_count();
     let mut starts = vec![0u32; n + 1];
     for s in &state.springs {
@@ -603,16 +627,18 @@ fn links(state: &State) -> (Vec<u32>, Vec<u32>, Vec<(f64, f64)>) {
     let total = starts[n] as usize;
     let mut fill = starts.clone();
     let mut others = vec![0u32; total];
-    let mut ks = vec![(0.0, 0.0); total];
-    for s in &state.springs {
+    let mut records = vec![[0.0; 4]; total];
+    let dashpot = state.materials.dashpot();
+    for (i, s) in state.springs.iter().enumerate() {
+        let c = dashpot.get(i).copied().unwrap_or(0.0);
         for (from, to) in [(s.a, s.b), (s.b, s.a)] {
             let at = fill[from as usize] as usize;
             others[at] = to;
-            ks[at] = (s.k, s.rest);
+            records[at] = [s.k, s.rest, c, 0.0];
             fill[from as usize] += 1;
         }
     }
-    (starts, others, ks)
+    (starts, others, records)
 }
 
 fn reals(values: &[f64], precision: Precision) -> Vec<u8> {
@@ -627,11 +653,6 @@ fn reals(values: &[f64], precision: Precision) -> Vec<u8> {
 
 fn vectors(values: &[DVec2], precision: Precision) -> Vec<u8> {
     let flat: Vec<f64> = values.iter().flat_map(|v| [v.x, v.y]).collect();
-    reals(&flat, precision)
-}
-
-fn pairs(values: &[(f64, f64)], precision: Precision) -> Vec<u8> {
-    let flat: Vec<f64> = values.iter().flat_map(|&(a, b)| [a, b]).collect();
     reals(&flat, precision)
 }
 
