@@ -25,8 +25,8 @@ pub enum Device {
     #[default]
     Cpu,
     /// The graphics card (the `gpu` feature): symplectic and explicit Euler with obstacles, the
-    /// ground's contact and dashpots; a scene that needs more (contact between particles,
-    /// tearing, pressure, muscles, plasticity) runs on the CPU and the run says why.
+    /// ground's contact, dashpots and tearing; a scene that needs more (contact between
+    /// particles, pressure, muscles, plasticity) runs on the CPU and the run says why.
     Gpu,
 }
 

@@ -5,7 +5,7 @@
 use super::perf;
 use crate::scene::LoadedScene;
 use crate::sim::{self, Integrator, SimParams, Solver};
-use crate::solver::gpu::{ExplicitMethod, ExplicitSettings, Gpu, GpuStep};
+use crate::solver::gpu::{ExplicitMethod, ExplicitSettings, Gpu, GpuError, GpuStep};
 use std::time::Instant;
 
 /// The cloths measured by default: 0.26 M, 4.2 M and 16.8 M springs (the sizes).
@@ -26,8 +26,10 @@ pub struct Row {
     pub per_submit: u64,
     /// Steps timed.
     pub steps: u64,
-    /// The best of the runs' wall times, s.
+    /// The best of the runs' wall times, s (NaN when the figure could not be measured).
     pub wall_s: f64,
+    /// Why a figure is missing (the cloth does not fit the adapter's buffers).
+    pub note: Option<String>,
 }
 
 impl Row {
@@ -78,6 +80,7 @@ pub fn run(
             per_submit: 0,
             steps,
             wall_s: best,
+            note: None,
         });
         let params = world.resource::<SimParams>().clone();
         let settings = ExplicitSettings {
@@ -87,16 +90,34 @@ pub fn run(
             damping: params.damping,
             ground: params.ground,
             contact: None,
+            tear: None,
         };
         for precision in gpu.precisions() {
-            let mut card = GpuStep::new(
+            let made = GpuStep::new(
                 gpu,
                 &world.resource::<Solver>().state,
                 &settings,
                 &[],
                 precision,
-            )
-            .map_err(|e| e.to_string())?;
+            );
+            let mut card = match made {
+                Ok(card) => card,
+                Err(e @ GpuError::TooLarge(_)) => {
+                    progress(&format!("cloth{w}: {e}"));
+                    rows.push(Row {
+                        width: w,
+                        springs,
+                        device: gpu.adapter(),
+                        precision: precision.name(),
+                        per_submit: 0,
+                        steps: 0,
+                        wall_s: f64::NAN,
+                        note: Some(e.to_string()),
+                    });
+                    continue;
+                }
+                Err(e) => return Err(e.to_string()),
+            };
             card.run(3);
             card.finish().map_err(|e| e.to_string())?;
             for per_submit in [1, steps] {
@@ -125,6 +146,7 @@ pub fn run(
                     per_submit,
                     steps,
                     wall_s: best,
+                    note: None,
                 });
             }
         }
@@ -165,16 +187,26 @@ pub fn markdown(rows: &[Row], machine: &str, command: &str) -> String {
     s += "| cloth | springs | device | precision | steps a submit | steps | M spring updates/s | µs a step | against the CPU |\n";
     s += "|---|---:|---|---|---:|---:|---:|---:|---:|\n";
     for r in rows {
+        if let Some(note) = &r.note {
+            s += &format!(
+                "| {w}² | {:.2} M | {} | {} | – | – | – | – | {note} |\n",
+                r.springs as f64 / 1e6,
+                r.device,
+                r.precision,
+                w = r.width
+            );
+            continue;
+        }
         let cpu = rows
             .iter()
-            .find(|c| c.width == r.width && c.per_submit == 0)
+            .find(|c| c.width == r.width && c.device == "CPU")
             .map_or(f64::NAN, |c| c.rate_m());
         s += &format!(
             "| {w}² | {:.2} M | {} | {} | {} | {} | {:.0} | {:.1} | {:.2}× |\n",
             r.springs as f64 / 1e6,
             r.device,
             r.precision,
-            if r.per_submit == 0 {
+            if r.device == "CPU" {
                 "–".to_string()
             } else {
                 r.per_submit.to_string()

@@ -2,15 +2,15 @@
 //! and stepping the world's packed state there ([`advance_on_gpu`]).
 //!
 //! The card runs symplectic and explicit Euler with gravity, external forces, damping, the
-//! ground, pins, dashpots, and the obstacles and the ground's contact with friction and
-//! restitution ([`crate::solver::gpu`]). A scene that uses anything else stays on the CPU,
+//! ground, pins, dashpots, tearing, and the obstacles and the ground's contact with friction
+//! and restitution ([`crate::solver::gpu`]). A scene that uses anything else stays on the CPU,
 //! and [`unsupported`] says what keeps it there, in words a user reads.
 
 use super::obstacles::Obstacles;
 use super::params::{SimClock, SimParams, SimStatus};
 use super::solver::Solver;
 use super::watch::EnergyPeak;
-use crate::solver::gpu::{ExplicitMethod, ExplicitSettings, Gpu, GpuStep, Precision};
+use crate::solver::gpu::{ExplicitMethod, ExplicitSettings, Gpu, GpuStep, Precision, TearSettings};
 use crate::solver::method::Integrator;
 use bevy::ecs::world::World;
 
@@ -37,9 +37,6 @@ pub fn unsupported(world: &World) -> Option<String> {
             what.push("contact by outlines".to_string());
         }
     }
-    if params.tear.is_some() {
-        what.push("tearing".to_string());
-    }
     if let Some(m) = GpuStep::unsupported(&world.resource::<Solver>().state) {
         what.push(m);
     }
@@ -52,8 +49,9 @@ pub fn unsupported(world: &World) -> Option<String> {
     }
 }
 
-/// The card's step settings from the world's parameters.
-pub fn settings(params: &SimParams) -> ExplicitSettings {
+/// The card's step settings from the world's parameters; tearing looks every
+/// `steps_per_tick` steps, at the end of each of the CPU's ticks.
+pub fn settings(params: &SimParams, steps_per_tick: u64) -> ExplicitSettings {
     ExplicitSettings {
         method: match params.integrator {
             Integrator::ExplicitEuler => ExplicitMethod::ExplicitEuler,
@@ -64,7 +62,20 @@ pub fn settings(params: &SimParams) -> ExplicitSettings {
         damping: params.damping,
         ground: params.ground,
         contact: params.contact,
+        tear: params.tear.map(|strain| TearSettings {
+            strain,
+            every: steps_per_tick.min(u32::MAX as u64) as u32,
+        }),
     }
+}
+
+/// The steps a fixed tick runs at the world's dt ([`super::advance`]'s rule).
+fn steps_per_tick(world: &World) -> u64 {
+    let dt = world.resource::<SimParams>().dt;
+    let target = world
+        .resource::<super::params::TickPlan>()
+        .target_tick_seconds;
+    ((target / dt).round() as u64).clamp(1, 10_000)
 }
 
 /// Steps the world's packed state `steps` times on `gpu` in `precision`, in submits of up to
@@ -90,18 +101,30 @@ pub fn advance_on_gpu(
     let mut card = {
         let solver = world.resource::<Solver>();
         let obstacles = world.resource::<Obstacles>().placed();
-        GpuStep::new(gpu, &solver.state, &settings(&params), obstacles, precision)
+        let settings = settings(&params, steps_per_tick(world));
+        GpuStep::new(gpu, &solver.state, &settings, obstacles, precision)
             .map_err(|e| e.to_string())?
     };
     let mut taken = 0;
+    let mut torn = vec![];
     while taken < steps {
         let n = (steps - taken).min(STEPS_PER_READ);
         card.place(world.resource::<Obstacles>().placed());
         card.run(n as u32);
+        if taken + n == steps {
+            // The CPU tears at the end of every tick, its run's last (shorter) one too.
+            card.tear_now();
+        }
         {
             let mut solver = world.resource_mut::<Solver>();
             card.read_into(&mut solver.state)
                 .map_err(|e| e.to_string())?;
+            // A spring the card broke carries nothing from here on (its entity goes at the
+            // end of the run, and the next tick repacks without it).
+            for i in card.torn_springs().map_err(|e| e.to_string())? {
+                solver.state.springs[i].k = 0.0;
+                torn.push(i);
+            }
         }
         let contacts = card.contacts().map_err(|e| e.to_string())?;
         {
@@ -143,5 +166,26 @@ pub fn advance_on_gpu(
     world
         .run_system_cached(super::obstacles::write_back_obstacles)
         .map_err(|e| e.to_string())?;
+    // The entities take the card's state, as the tick's write-back gives them the CPU's: the
+    // next repack (the torn springs' removal is one) builds from them.
+    if !world.resource::<Solver>().non_finite {
+        world
+            .run_system_cached(super::sync::sync_from_solver)
+            .map_err(|e| e.to_string())?;
+    }
+    if !torn.is_empty() {
+        let entities: Vec<_> = {
+            let solver = world.resource::<Solver>();
+            torn.iter()
+                .filter_map(|&i| solver.spring_entity_in(world, i))
+                .collect()
+        };
+        world.resource_mut::<super::params::Tearing>().pending = entities;
+        world
+            .run_system_cached(super::tear::remove_torn_springs)
+            .map_err(|e| e.to_string())?;
+        // Repacked now, as the next tick would, so that the state reads without them.
+        super::pack(world)?;
+    }
     Ok(taken)
 }

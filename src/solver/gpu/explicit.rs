@@ -18,6 +18,8 @@ use wgpu::util::DeviceExt;
 const SOURCE: &str = include_str!("explicit.wgsl");
 /// The contact pass's kernels (`collide`, and `advance` for the obstacles), in f32.
 const CONTACT: &str = include_str!("contact.wgsl");
+/// Tearing's kernel, in f32.
+const TEAR: &str = include_str!("tear.wgsl");
 /// Threads in a work group (the kernel's `@workgroup_size`).
 const GROUP: u32 = 256;
 /// Numbers in one obstacle's record (`Obstacle` in `contact.wgsl`).
@@ -50,6 +52,18 @@ pub struct ExplicitSettings {
     /// The contact settings: with them the ground is the contact pass's (at the particles'
     /// radius, with friction and restitution), not the step's clamp.
     pub contact: Option<ContactSettings>,
+    /// Tearing, when on.
+    pub tear: Option<TearSettings>,
+}
+
+/// When springs tear: as the CPU's tick does ([`crate::sim::tear`]), a spring stretched past
+/// (1 + strain) × rest breaks at the end of every `every` steps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TearSettings {
+    /// The strain past which a spring breaks.
+    pub strain: f64,
+    /// Steps between the checks: the CPU's steps a tick.
+    pub every: u32,
 }
 
 /// One packed state on the card, and the pipeline that steps it.
@@ -74,6 +88,24 @@ pub struct GpuStep {
     dt: f64,
     /// The contact pass, when the scene has obstacles, or a ground with contact set.
     contact: Option<ContactPass>,
+    /// Tearing's pass, when tearing is on.
+    tear: Option<TearPass>,
+    /// Steps since tearing last looked.
+    since_tear: u32,
+    /// Each link's spring, in the state's spring order.
+    link_spring: Vec<u32>,
+}
+
+/// Tearing's pipeline and buffers.
+#[derive(Debug)]
+struct TearPass {
+    pipeline: wgpu::ComputePipeline,
+    params: wgpu::Buffer,
+    torn: wgpu::Buffer,
+    links: usize,
+    /// Bind group `g` reads the positions in `x[g]`.
+    groups: [wgpu::BindGroup; 2],
+    every: u32,
 }
 
 /// The contact pass's pipelines and buffers.
@@ -108,17 +140,28 @@ impl GpuStep {
         }
         let n = state.particle_count();
         let dashpots = state.materials.has_dashpots();
-        let (starts, others, records) = links(state);
+        let (starts, others, records, link_spring) = links(state);
         let limits = gpu.device.limits();
-        let widest = (others.len().max(n) * 2 * precision.bytes()) as u64;
-        if widest > limits.max_storage_buffer_binding_size
-            || widest > limits.max_buffer_size
-            || n >= u32::MAX as usize / 2
-        {
+        // The largest buffer: the link records, their indices, or the particles' vectors.
+        let width = if dashpots { 4 } else { 2 };
+        let widest = [
+            others.len() * width * precision.bytes(),
+            (n + 1 + others.len()) * 4,
+            n * 2 * precision.bytes(),
+        ]
+        .into_iter()
+        .max()
+        .unwrap_or(0) as u64;
+        let allowed = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        if widest > allowed || n >= u32::MAX as usize / 2 {
             return Err(GpuError::TooLarge(format!(
-                "{n} particles and {} springs need a buffer of {widest} bytes; the adapter allows {}",
+                "{n} particles and {} springs need a buffer of {} MB in {}; the adapter binds at most {} MB",
                 state.spring_count(),
-                limits.max_storage_buffer_binding_size
+                widest.div_ceil(1 << 20),
+                precision.name(),
+                allowed >> 20
             )));
         }
         let device = &gpu.device;
@@ -169,7 +212,6 @@ impl GpuStep {
         let link_bytes: Vec<u8> = index.iter().flat_map(|i| i.to_le_bytes()).collect();
         let links = init("links", &link_bytes, storage);
         // (k, L) a link, or (k, L, c, 0) with dashpots.
-        let width = if dashpots { 4 } else { 2 };
         let flat: Vec<f64> = records.iter().flat_map(|r| r[..width].to_vec()).collect();
         let spring = init("springs", &reals(&flat, precision), storage);
         let external = if state.external_active {
@@ -212,6 +254,23 @@ impl GpuStep {
             !obstacles.is_empty() || (settings.contact.is_some() && settings.ground.is_some());
         let contact = needs_contact
             .then(|| ContactPass::new(gpu, precision, obstacles.len(), [&x0, &x1], [&v0, &v1], &w));
+        let tear = settings.tear.map(|t| {
+            let source = if dashpots {
+                TEAR.replace("alias Link = vec2<real>;", "alias Link = vec4<real>;")
+            } else {
+                TEAR.to_string()
+            };
+            TearPass::new(
+                gpu,
+                precision,
+                &source,
+                others.len(),
+                [&x0, &x1],
+                &links,
+                &spring,
+                t,
+            )
+        });
         let mut step = GpuStep {
             gpu: gpu.clone(),
             precision,
@@ -227,8 +286,12 @@ impl GpuStep {
             steps: 0,
             dt: settings.dt,
             contact,
+            tear,
+            since_tear: 0,
+            link_spring,
         };
         step.set(settings, state.external_active);
+        step.set_tear(settings);
         step.place(obstacles);
         for scope in [invalid, out_of_memory] {
             if let Some(e) = ready(scope.pop()) {
@@ -306,6 +369,21 @@ impl GpuStep {
             bytes.resize(96, 0);
             self.gpu.queue.write_buffer(&c.params, 0, &bytes);
         }
+    }
+
+    /// Writes tearing's settings to the card (its strain; how often it looks is fixed when the
+    /// step is made).
+    fn set_tear(&mut self, settings: &ExplicitSettings) {
+        let (Some(t), Some(strain)) = (&self.tear, settings.tear.map(|t| t.strain)) else {
+            return;
+        };
+        let mut bytes: Vec<u8> = [self.n, self.dispatch.0 * GROUP, 0, 0]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        bytes.extend(reals(&[1.0 + strain, 0.0], self.precision));
+        bytes.resize(32, 0);
+        self.gpu.queue.write_buffer(&t.params, 0, &bytes);
     }
 
     /// Writes the obstacles' shapes and poses to the card (as many as it was made with): the
@@ -389,10 +467,69 @@ impl GpuStep {
                     pass.dispatch_workgroups((c.count as u32).div_ceil(64).max(1), 1, 1);
                 }
                 self.current = 1 - self.current;
+                if let Some(t) = &self.tear {
+                    self.since_tear += 1;
+                    if self.since_tear == t.every {
+                        t.record(&mut pass, self.current, self.dispatch);
+                        self.since_tear = 0;
+                    }
+                }
             }
         }
         self.gpu.queue.submit([encoder.finish()]);
         self.steps += u64::from(steps);
+    }
+
+    /// Tearing's look now, if steps ran since the last (the end of the CPU's last, shorter tick
+    /// of a run: the CPU tears at the end of every tick).
+    pub fn tear_now(&mut self) {
+        let Some(t) = &self.tear else { return };
+        if self.since_tear == 0 {
+            return;
+        }
+        let mut encoder = self
+            .gpu
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("hooke tear"),
+            });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("hooke tear"),
+                timestamp_writes: None,
+            });
+            t.record(&mut pass, self.current, self.dispatch);
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+        self.since_tear = 0;
+    }
+
+    /// The springs (their indices in the state's spring order) that tore since the last call,
+    /// read from the card.
+    pub fn torn_springs(&self) -> Result<Vec<usize>, GpuError> {
+        let Some(t) = &self.tear else {
+            return Ok(vec![]);
+        };
+        let bytes = self.read(&[(&t.torn, 0, 4 * t.links as u64)])?;
+        let mut torn: Vec<usize> = bytes
+            .chunks_exact(4)
+            .enumerate()
+            .filter(|(_, b)| b.iter().any(|&x| x != 0))
+            .map(|(link, _)| self.link_spring[link] as usize)
+            .collect();
+        torn.sort_unstable();
+        torn.dedup();
+        if !torn.is_empty() {
+            let mut encoder =
+                self.gpu
+                    .device
+                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                        label: Some("clear torn"),
+                    });
+            encoder.clear_buffer(&t.torn, 0, None);
+            self.gpu.queue.submit([encoder.finish()]);
+        }
+        Ok(torn)
     }
 
     /// Waits until every submitted step has run.
@@ -485,6 +622,75 @@ impl GpuStep {
     /// The card's name.
     pub fn adapter(&self) -> String {
         self.gpu.adapter()
+    }
+}
+
+impl TearPass {
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        gpu: &Gpu,
+        precision: Precision,
+        source: &str,
+        links: usize,
+        x: [&wgpu::Buffer; 2],
+        index: &wgpu::Buffer,
+        spring: &wgpu::Buffer,
+        settings: TearSettings,
+    ) -> TearPass {
+        let device = &gpu.device;
+        let module = shader(device, source, "hooke tear", precision);
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("hooke tear"),
+            layout: None,
+            module: &module,
+            entry_point: Some("tear"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tear settings"),
+            size: 32,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let torn = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("torn links"),
+            size: (4 * links.max(4)) as u64,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let layout = pipeline.get_bind_group_layout(0);
+        let bind = |at: usize| {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("hooke tear"),
+                layout: &layout,
+                entries: &entries(&[
+                    (0, &params),
+                    (1, x[at]),
+                    (2, index),
+                    (3, spring),
+                    (4, &torn),
+                ]),
+            })
+        };
+        let groups = [bind(0), bind(1)];
+        TearPass {
+            pipeline,
+            params,
+            torn,
+            links,
+            groups,
+            every: settings.every.max(1),
+        }
+    }
+
+    /// Records a look at the positions in `x[current]`.
+    fn record(&self, pass: &mut wgpu::ComputePass, current: usize, dispatch: (u32, u32)) {
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.groups[current], &[]);
+        pass.dispatch_workgroups(dispatch.0, dispatch.1, 1);
     }
 }
 
@@ -612,9 +818,11 @@ fn shader(
 }
 
 /// Each particle's links: where each particle's list starts (n + 1 values), each link's other
-/// end, and each link's (k, L, c, 0) (c its dashpot, 0 without), from the packed springs by a
-/// counting sort.
-fn links(state: &State) -> (Vec<u32>, Vec<u32>, Vec<[f64; 4]>) {
+/// end, each link's (k, L, c, 0) (c its dashpot, 0 without), and each link's spring, from the
+/// packed springs by a counting sort.
+type Links = (Vec<u32>, Vec<u32>, Vec<[f64; 4]>, Vec<u32>);
+
+fn links(state: &State) -> Links {
     let n = state.particle_count();
     let mut starts = vec![0u32; n + 1];
     for s in &state.springs {
@@ -628,6 +836,7 @@ fn links(state: &State) -> (Vec<u32>, Vec<u32>, Vec<[f64; 4]>) {
     let mut fill = starts.clone();
     let mut others = vec![0u32; total];
     let mut records = vec![[0.0; 4]; total];
+    let mut spring = vec![0u32; total];
     let dashpot = state.materials.dashpot();
     for (i, s) in state.springs.iter().enumerate() {
         let c = dashpot.get(i).copied().unwrap_or(0.0);
@@ -635,10 +844,11 @@ fn links(state: &State) -> (Vec<u32>, Vec<u32>, Vec<[f64; 4]>) {
             let at = fill[from as usize] as usize;
             others[at] = to;
             records[at] = [s.k, s.rest, c, 0.0];
+            spring[at] = i as u32;
             fill[from as usize] += 1;
         }
     }
-    (starts, others, records)
+    (starts, others, records, spring)
 }
 
 fn reals(values: &[f64], precision: Precision) -> Vec<u8> {
