@@ -374,3 +374,68 @@ fn tearing_on_the_card_matches_the_cpu() {
         }
     }
 }
+
+/// The fixed tick on the card (`CardStep`, the panel's switch), through the app's own ticks:
+/// the grid swept by a moving, turning box, 1000 steps on the card in f64, a particle moved
+/// through its `Position` (a drag), 1000 more on the card, 500 on the CPU with the switch off
+/// and 500 on the card again, against the same on the CPU alone (to 1e-9 m, the same clock).
+/// A scene the card does not run steps on the CPU with the reason named.
+#[test]
+fn the_tick_steps_on_the_card_when_switched_and_carries_the_state_over() {
+    let Some(gpu) = card() else { return };
+    if !gpu.has_f64() {
+        println!("skipped: {} has no f64", gpu.adapter());
+        return;
+    }
+    let nudge = |app: &mut bevy::app::App| {
+        let world = app.world_mut();
+        let mut q = world.query::<(&hooke::sim::SolverIndex, &mut hooke::sim::Position)>();
+        for (i, mut p) in q.iter_mut(world) {
+            if i.0 == 9 {
+                p.0.x += 0.01;
+            }
+        }
+    };
+    let mut cpu = swept_grid(Integrator::SymplecticEuler);
+    step(&mut cpu, 1000);
+    nudge(&mut cpu);
+    step(&mut cpu, 2000);
+    let mut app = swept_grid(Integrator::SymplecticEuler);
+    let switch = |app: &mut bevy::app::App, on: bool| {
+        let mut card = app.world_mut().resource_mut::<sim::gpu::CardStep>();
+        card.wanted = on;
+    };
+    {
+        let mut card = app.world_mut().resource_mut::<sim::gpu::CardStep>();
+        card.use_card(gpu.clone());
+        card.precision = Some(Precision::F64);
+    }
+    switch(&mut app, true);
+    step(&mut app, 1000);
+    let card = app.world().resource::<sim::gpu::CardStep>();
+    assert!(card.active(), "not on the card: {:?}", card.why_not);
+    nudge(&mut app);
+    step(&mut app, 1000);
+    switch(&mut app, false);
+    step(&mut app, 500);
+    assert!(!app.world().resource::<sim::gpu::CardStep>().active());
+    switch(&mut app, true);
+    step(&mut app, 500);
+    let d = difference(&cpu, &app);
+    println!("{d:e} m");
+    assert!(d < 1e-9, "a particle is {d} m off the CPU's run");
+    assert_eq!(app.world().resource::<SimClock>().steps, 3000);
+
+    let mut pile = app_with(presets::resolve("pile").unwrap().scene.clone());
+    {
+        let mut card = pile.world_mut().resource_mut::<sim::gpu::CardStep>();
+        card.use_card(gpu.clone());
+        card.wanted = true;
+    }
+    step(&mut pile, 100);
+    let card = pile.world().resource::<sim::gpu::CardStep>();
+    assert!(!card.active());
+    let why = card.why_not.clone().unwrap_or_default();
+    assert!(why.contains("contact between particles"), "{why}");
+    assert_eq!(pile.world().resource::<SimClock>().steps, 100);
+}

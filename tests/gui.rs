@@ -527,25 +527,25 @@ fn every_control_works_under_real_input_and_the_log_stays_quiet() {
 
     // The panel's tearing field takes a typed percentage: 30 is a strain of 0.3 (it was read
     // as 30, 3000 %, and clamped to 200 %). The row's place is the empty scene's panel
-    // layout, under the contact rows.
-    s.move_px(95, 347);
+    // layout, under the contact rows (and the Device row above them).
+    s.move_px(95, 368);
     s.x(&["click", "1"]);
     s.expect("tearing on", |st| st["tear"] == 0.6);
-    s.move_px(242, 347);
+    s.move_px(242, 368);
     s.x(&["click", "1"]);
     std::thread::sleep(Duration::from_millis(300));
     s.x(&["windowfocus", "--sync", &s.window]);
     s.x(&["type", "--delay", "80", "30"]);
     s.key("Return");
     s.expect("30 % typed", |st| st["tear"] == 0.3);
-    s.move_px(95, 347);
+    s.move_px(95, 368);
     s.x(&["click", "1"]);
     s.expect("tearing off", |st| st["tear"].is_null());
 
     // The dt field takes a typed fraction: 1/60 is a frame's step, to the bit of 1.0 / 60.0.
     // A click on the value box opens it with its text selected, so typing replaces it.
     let type_dt = |text: &str| {
-        s.move_px(225, 263);
+        s.move_px(225, 284);
         s.x(&["click", "1"]);
         std::thread::sleep(Duration::from_millis(300));
         s.x(&["windowfocus", "--sync", &s.window]);
@@ -556,6 +556,18 @@ fn every_control_works_under_real_input_and_the_log_stays_quiet() {
     s.expect("dt 1/60 typed", |st| st["dt"] == 1.0 / 60.0);
     type_dt("1e-4");
     s.expect("dt back to 1e-4", |st| st["dt"] == 1e-4);
+
+    // The Device row's GPU switch: the renderer's card is handed over, and the empty scene's
+    // steps go to it (it runs symplectic Euler), then back.
+    s.expect("a card handed over", |st| st["adapter"].is_string());
+    s.move_px(95, 179);
+    s.x(&["click", "1"]);
+    s.expect("stepping on the card", |st| st["device"] == "gpu");
+    s.move_px(95, 179);
+    s.x(&["click", "1"]);
+    s.expect("back on the CPU", |st| {
+        st["device"] == "cpu" && st["gpu_wanted"] == false
+    });
 
     // Left click on empty canvas: three particles joined within 0.15, the first pinned.
     for (i, &(x, y)) in [(0.5, 0.8), (0.6, 0.8), (0.55, 0.7)].iter().enumerate() {

@@ -69,6 +69,63 @@ pub fn settings(params: &SimParams, steps_per_tick: u64) -> ExplicitSettings {
     }
 }
 
+/// What follows a submit of `n` steps: the state read back into the solver (a spring the card
+/// broke carries nothing from here on: its index goes into `torn`, its entity at the end of the
+/// run), the obstacles moved on the CPU in f64 as the step moves them, the last step's
+/// contacts, the clock, the energy peak when one is kept, and a blow-up's status. Returns
+/// whether the state is finite.
+fn after_submit(
+    world: &mut World,
+    card: &GpuStep,
+    n: u64,
+    torn: &mut Vec<usize>,
+) -> Result<bool, String> {
+    let params = world.resource::<SimParams>().clone();
+    {
+        let mut solver = world.resource_mut::<Solver>();
+        card.read_into(&mut solver.state)
+            .map_err(|e| e.to_string())?;
+        for i in card.torn_springs().map_err(|e| e.to_string())? {
+            solver.state.springs[i].k = 0.0;
+            torn.push(i);
+        }
+    }
+    let contacts = card.contacts().map_err(|e| e.to_string())?;
+    {
+        let mut o = world.resource_mut::<Obstacles>();
+        for p in &mut o.placed {
+            if p.pose.velocity != bevy::math::DVec2::ZERO || p.pose.angular_velocity != 0.0 {
+                for _ in 0..n {
+                    p.advance(params.dt);
+                }
+            }
+        }
+        o.contacts = crate::solver::Contacts {
+            surfaces: contacts,
+            ..Default::default()
+        };
+    }
+    let mut clock = world.resource_mut::<SimClock>();
+    clock.steps += n;
+    clock.time += n as f64 * params.dt;
+    let clock = *clock;
+    let solver = world.resource::<Solver>();
+    let finite = !solver.non_finite;
+    if world.contains_resource::<EnergyPeak>() {
+        let energy = solver.energy(params.gravity).total();
+        let mut peak = world.resource_mut::<EnergyPeak>();
+        peak.max = Some(peak.max.map_or(energy, |m| m.max(energy)));
+    }
+    if !finite {
+        *world.resource_mut::<SimStatus>() = SimStatus::BlewUp {
+            step: clock.steps,
+            time: clock.time,
+        };
+        world.resource_mut::<SimParams>().paused = true;
+    }
+    Ok(finite)
+}
+
 /// The steps a fixed tick runs at the world's dt ([`super::advance`]'s rule).
 fn steps_per_tick(world: &World) -> u64 {
     let dt = world.resource::<SimParams>().dt;
@@ -115,51 +172,8 @@ pub fn advance_on_gpu(
             // The CPU tears at the end of every tick, its run's last (shorter) one too.
             card.tear_now();
         }
-        {
-            let mut solver = world.resource_mut::<Solver>();
-            card.read_into(&mut solver.state)
-                .map_err(|e| e.to_string())?;
-            // A spring the card broke carries nothing from here on (its entity goes at the
-            // end of the run, and the next tick repacks without it).
-            for i in card.torn_springs().map_err(|e| e.to_string())? {
-                solver.state.springs[i].k = 0.0;
-                torn.push(i);
-            }
-        }
-        let contacts = card.contacts().map_err(|e| e.to_string())?;
-        {
-            // The obstacles move on the CPU too, in f64, as the step moves them
-            // (`Placed::advance` after each step's contact pass).
-            let mut o = world.resource_mut::<Obstacles>();
-            for p in &mut o.placed {
-                if p.pose.velocity != bevy::math::DVec2::ZERO || p.pose.angular_velocity != 0.0 {
-                    for _ in 0..n {
-                        p.advance(params.dt);
-                    }
-                }
-            }
-            o.contacts = crate::solver::Contacts {
-                surfaces: contacts,
-                ..Default::default()
-            };
-        }
         taken += n;
-        let mut clock = world.resource_mut::<SimClock>();
-        clock.steps += n;
-        clock.time += n as f64 * params.dt;
-        let clock = *clock;
-        let solver = world.resource::<Solver>();
-        let energy = solver.energy(params.gravity).total();
-        let finite = !solver.non_finite;
-        if let Some(mut peak) = world.get_resource_mut::<EnergyPeak>() {
-            peak.max = Some(peak.max.map_or(energy, |m| m.max(energy)));
-        }
-        if !finite {
-            *world.resource_mut::<SimStatus>() = SimStatus::BlewUp {
-                step: clock.steps,
-                time: clock.time,
-            };
-            world.resource_mut::<SimParams>().paused = true;
+        if !after_submit(world, &card, n, &mut torn)? {
             break;
         }
     }
@@ -188,4 +202,166 @@ pub fn advance_on_gpu(
         super::pack(world)?;
     }
     Ok(taken)
+}
+
+/// The fixed tick's steps on the card: the panel's switch, and what a library user sets to
+/// step a world there tick by tick. With `wanted` on and a card given
+/// ([`CardStep::use_card`]; the app hands over its renderer's), each tick whose scene the card
+/// runs steps there: the state is uploaded when the CPU changed it (a repack, a drag, an
+/// edit), the tick's steps run in one submit, and the state comes back for the write-back,
+/// the drawing and tearing, which then run as on the CPU. A scene the card does not run
+/// steps on the CPU, and `why_not` says why.
+#[derive(bevy::prelude::Resource, Default)]
+pub struct CardStep {
+    /// Step on the card when it can.
+    pub wanted: bool,
+    /// The width the card computes in.
+    pub precision: Option<Precision>,
+    /// Why this tick's steps ran on the CPU although the card was wanted; `None` while they run
+    /// on the card or the card is not wanted.
+    pub why_not: Option<String>,
+    gpu: Option<Gpu>,
+    step: Option<GpuStep>,
+    /// What the card's copy was made from: the state's revision, particles and obstacles, the
+    /// settings, the precision, and whether an external force was set.
+    made_for: Option<MadeFor>,
+    /// The state's edit count when the card last had the state.
+    edits: u64,
+    /// Whether the last tick's steps ran on the card.
+    active: bool,
+}
+
+impl CardStep {
+    /// The card to step on.
+    pub fn use_card(&mut self, gpu: Gpu) {
+        self.gpu = Some(gpu);
+        self.step = None;
+        self.made_for = None;
+    }
+
+    /// The card's name, when one was given.
+    pub fn adapter(&self) -> Option<String> {
+        self.gpu.as_ref().map(Gpu::adapter)
+    }
+
+    /// Whether the last tick's steps ran on the card.
+    pub fn active(&self) -> bool {
+        self.active
+    }
+
+    /// The precision in use: the one asked for, else f32.
+    fn precision(&self) -> Precision {
+        self.precision.unwrap_or(Precision::F32)
+    }
+}
+
+/// What a card's copy of the state was made from ([`CardStep`]).
+type MadeFor = (u64, usize, usize, ExplicitSettings, Precision, bool);
+
+/// Run condition: this tick's steps go to the card (the card is wanted, given, and runs the
+/// scene; [`decide_device`] settled it).
+pub fn on_card(card: Option<bevy::prelude::Res<CardStep>>) -> bool {
+    card.is_some_and(|c| c.active)
+}
+
+/// Before the tick's steps: whether they go to the card, and if not although it is wanted, why.
+pub fn decide_device(world: &mut World) {
+    let Some(card) = world.get_resource::<CardStep>() else {
+        return;
+    };
+    if !card.wanted {
+        if card.active || card.why_not.is_some() || card.step.is_some() {
+            let mut card = world.resource_mut::<CardStep>();
+            card.active = false;
+            card.why_not = None;
+            card.step = None;
+            card.made_for = None;
+        }
+        return;
+    }
+    let why = if card.gpu.is_none() {
+        Some("no graphics card was given".to_string())
+    } else if world
+        .resource::<super::pull::Attraction>()
+        .active_at
+        .is_some()
+    {
+        Some("the GPU does not run the pull yet".to_string())
+    } else {
+        unsupported(world)
+    };
+    let mut card = world.resource_mut::<CardStep>();
+    card.active = why.is_none();
+    if card.why_not != why {
+        card.why_not = why;
+    }
+}
+
+/// The tick's steps on the card (in place of the CPU's `run_steps`, under [`on_card`]).
+pub fn run_steps_on_card(world: &mut World) {
+    let steps = u64::from(world.resource::<super::params::TickPlan>().steps_per_tick);
+    let start = std::time::Instant::now();
+    let Some(mut card) = world.remove_resource::<CardStep>() else {
+        return;
+    };
+    if let Err(e) = tick_on_card(world, &mut card, steps) {
+        // The card failed (a device lost, a buffer refused): the steps go back to the CPU,
+        // and the panel says why.
+        tracing::warn!("hooke: {e}; stepping on the CPU");
+        card.wanted = false;
+        card.active = false;
+        card.step = None;
+        card.made_for = None;
+        card.why_not = Some(e);
+    }
+    world.insert_resource(card);
+    let taken = steps;
+    world
+        .resource_mut::<super::schedule::StepBudget>()
+        .note_steps(start.elapsed(), taken);
+}
+
+fn tick_on_card(world: &mut World, card: &mut CardStep, steps: u64) -> Result<(), String> {
+    let Some(gpu) = card.gpu.clone() else {
+        return Ok(());
+    };
+    let params = world.resource::<SimParams>().clone();
+    let precision = card.precision();
+    let settings = ExplicitSettings {
+        // Tearing stays the tick's own (the CPU's systems read the state the card sends back).
+        tear: None,
+        ..settings(&params, steps)
+    };
+    let (revision, n, edits, external) = {
+        let s = &world.resource::<Solver>().state;
+        (s.revision, s.particle_count(), s.edits, s.external_active())
+    };
+    let obstacles = world.resource::<Obstacles>().placed().len();
+    let key = (revision, n, obstacles, settings, precision, external);
+    let stale = card.made_for != Some(key);
+    let step = match card.step.take() {
+        Some(mut step) if !stale => {
+            // The CPU changed the state since the card last had it (a drag, an undo, a user
+            // force): the card takes it.
+            let state = &world.resource::<Solver>().state;
+            if card.edits != edits || state.external_active() {
+                step.write_state(state);
+            }
+            step
+        }
+        _ => {
+            let solver = world.resource::<Solver>();
+            let placed = world.resource::<Obstacles>().placed();
+            card.made_for = Some(key);
+            GpuStep::new(&gpu, &solver.state, &settings, placed, precision)
+                .map_err(|e| e.to_string())?
+        }
+    };
+    let step = card.step.insert(step);
+    step.place(world.resource::<Obstacles>().placed());
+    step.run(steps as u32);
+    let mut torn = vec![];
+    after_submit(world, step, steps, &mut torn)?;
+    card.edits = world.resource::<Solver>().state.edits;
+    Ok(())
 }

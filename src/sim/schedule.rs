@@ -171,7 +171,7 @@ impl StepBudget {
     }
 
     /// Notes that `steps` steps took `wall`.
-    fn note_steps(&mut self, wall: Duration, steps: u64) {
+    pub(crate) fn note_steps(&mut self, wall: Duration, steps: u64) {
         if steps == 0 {
             return;
         }
@@ -257,7 +257,8 @@ impl Plugin for SimPlugin {
                     .in_set(PhysicsSystems::Prepare),
                 run_steps
                     .in_set(PhysicsSystems::Step)
-                    .run_if(simulation_running),
+                    .run_if(simulation_running)
+                    .run_if(not(on_card)),
                 // Only when the solver changed since: a paused tick writes nothing back (14 ms a
                 // tick on the 2000² cloth).
                 sync_from_solver
@@ -289,6 +290,21 @@ impl Plugin for SimPlugin {
             plan_tick.in_set(RunFixedMainLoopSystems::BeforeFixedMainLoop),
         )
         .add_systems(Last, mark_frame_end);
+        #[cfg(feature = "gpu")]
+        app.init_resource::<super::gpu::CardStep>().add_systems(
+            FixedUpdate,
+            (
+                super::gpu::decide_device
+                    .in_set(PhysicsSystems::Prepare)
+                    .after(sync_tick)
+                    .after(super::obstacles::gather_obstacles)
+                    .run_if(inputs::inputs_valid),
+                super::gpu::run_steps_on_card
+                    .in_set(PhysicsSystems::Step)
+                    .run_if(simulation_running)
+                    .run_if(super::gpu::on_card),
+            ),
+        );
 
         app.init_schedule(PhysicsStep);
         app.edit_schedule(PhysicsStep, |schedule| {
@@ -618,6 +634,14 @@ fn collide(
         obstacles.set_changed();
     }
     n.contact += 1;
+}
+
+/// Whether this tick's steps go to the graphics card (never without the `gpu` feature).
+fn on_card(#[cfg(feature = "gpu")] card: Option<Res<super::gpu::CardStep>>) -> bool {
+    #[cfg(feature = "gpu")]
+    return super::gpu::on_card(card);
+    #[cfg(not(feature = "gpu"))]
+    false
 }
 
 /// Runs this tick's steps; stops at the first step that produced a non-finite value.

@@ -43,6 +43,7 @@ pub struct AppState<'w, 's> {
     attraction: Res<'w, Attraction>,
     pinned: Query<'w, 's, (), (With<Particle>, With<Pinned>)>,
     obstacles: Query<'w, 's, &'static crate::sim::ObstaclePose, With<crate::sim::Obstacle>>,
+    card: Res<'w, crate::sim::gpu::CardStep>,
 }
 
 /// Scenes up to this many particles list their positions in the status report.
@@ -105,6 +106,11 @@ pub fn drive(
             "dt": params.dt,
             "integrator": params.integrator.cli_name(),
             "iterations": params.iterations,
+            // Where the steps run: "gpu" while the panel's switch has them on the card.
+            "device": if app.card.active() { "gpu" } else { "cpu" },
+            "adapter": app.card.adapter(),
+            "gpu_wanted": app.card.wanted,
+            "gpu_why_not": app.card.why_not,
             // In scene order (creation order), for scenes up to REPORT_POSITIONS particles.
             "positions": (solver.particle_count() <= REPORT_POSITIONS)
                 .then(|| solver.x.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>()),

@@ -98,6 +98,7 @@ impl Plugin for AppPlugin {
                     )
                         .chain(),
                     view::match_antialiasing.run_if(resource_added::<RenderAdapterInfo>),
+                    hand_over_the_card.run_if(resource_added::<RenderAdapterInfo>),
                     stats::measure,
                     stats::estimate_stability,
                     plots::sample.after(stats::estimate_stability),
@@ -141,4 +142,20 @@ fn save_path(name: &str) -> PathBuf {
         .map(|n| dir.join(format!("{name}-{n}.ron")))
         .find(|p| !p.exists())
         .unwrap_or_else(|| dir.join(format!("{name}.ron")))
+}
+
+/// Gives the simulation the renderer's device and queue, so that the panel's GPU switch steps
+/// on the same card the app draws with.
+fn hand_over_the_card(
+    device: Res<bevy::render::renderer::RenderDevice>,
+    queue: Res<bevy::render::renderer::RenderQueue>,
+    info: Res<RenderAdapterInfo>,
+    mut card: ResMut<crate::sim::gpu::CardStep>,
+) {
+    let queue: &wgpu::Queue = &queue.0;
+    card.use_card(crate::solver::gpu::Gpu::from_device(
+        device.wgpu_device().clone(),
+        queue.clone(),
+        wgpu::AdapterInfo::clone(&info.0),
+    ));
 }

@@ -123,6 +123,7 @@ pub fn side_panel(
         history,
         mut attraction,
         scene_list,
+        mut card,
     } = extra;
     let ctx = contexts.ctx_mut()?;
     let mut root = egui::Ui::new(
@@ -252,6 +253,7 @@ pub fn side_panel(
                     });
                 ui.end_row();
                 iteration_rows(ui, p.integrator, &mut p.iterations);
+                device_rows(ui, &mut card);
 
                 ui.label("Stiffness k");
                 let stiffness = slider(&mut state.stiffness, 10.0..=1e6)
@@ -443,6 +445,11 @@ pub fn side_panel(
                 });
                 ui.end_row();
             });
+            // Why the GPU switch is on but the steps are not (a sentence: wrapped below the
+            // grid, whose columns do not wrap).
+            if let Some(why) = &card.why_not {
+                ui.colored_label(AMBER, format!("Stepping on the CPU: {why}."));
+            }
             ui.separator();
 
             // Stability and accuracy
@@ -597,6 +604,31 @@ fn xpbd_softness(stats: &crate::sim::SolveStats) -> Option<String> {
     })
 }
 
+/// The CPU/GPU switch: steps on the graphics card when it runs the scene (the state carries
+/// over both ways), and why not when it does not.
+fn device_rows(ui: &mut egui::Ui, card: &mut crate::sim::gpu::CardStep) {
+    ui.label("Device");
+    ui.horizontal(|ui| {
+        let adapter = card.adapter();
+        let mut on = card.wanted;
+        let toggle = egui::Checkbox::new(&mut on, "GPU");
+        let hover = adapter.clone().unwrap_or_else(|| "no graphics card".into());
+        if ui
+            .add_enabled(adapter.is_some(), toggle)
+            .on_hover_text(hover)
+            .changed()
+        {
+            card.wanted = on;
+        }
+        if card.active() {
+            ui.small("stepping on the card");
+        } else if card.why_not.is_some() {
+            ui.colored_label(AMBER, "on the CPU");
+        }
+    });
+    ui.end_row();
+}
+
 /// The panel's other resources (a system takes at most 16 parameters).
 #[derive(SystemParam)]
 pub struct PanelExtras<'w> {
@@ -604,6 +636,7 @@ pub struct PanelExtras<'w> {
     history: Res<'w, History>,
     attraction: ResMut<'w, Attraction>,
     scene_list: Res<'w, SceneList>,
+    card: ResMut<'w, crate::sim::gpu::CardStep>,
 }
 
 const RED: egui::Color32 = egui::Color32::from_rgb(255, 110, 90);

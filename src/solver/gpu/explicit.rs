@@ -79,6 +79,10 @@ pub struct GpuStep {
     x: [wgpu::Buffer; 2],
     /// Velocities, ping-ponged with the positions.
     v: [wgpu::Buffer; 2],
+    /// External forces (one zero vector when none was set at upload).
+    external: wgpu::Buffer,
+    /// Particles with an external force uploaded (0: none).
+    external_len: usize,
     /// Bind group `g` reads `x[g]` and writes `x[1 - g]`.
     groups: [wgpu::BindGroup; 2],
     current: usize,
@@ -219,7 +223,11 @@ impl GpuStep {
         } else {
             vec![0; 2 * precision.bytes()]
         };
-        let external = init("external", &external, storage);
+        let external = init(
+            "external",
+            &external,
+            storage | wgpu::BufferUsages::COPY_DST,
+        );
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("step settings"),
             size: 64,
@@ -280,6 +288,12 @@ impl GpuStep {
             params,
             x: [x0, x1],
             v: [v0, v1],
+            external_len: if state.external_active {
+                state.external.len()
+            } else {
+                0
+            },
+            external,
             groups,
             current: 0,
             dispatch,
@@ -436,6 +450,17 @@ impl GpuStep {
         };
         let bytes = self.read(&[(&c.counter, 4, 4)])?;
         Ok(u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]) as usize)
+    }
+
+    /// Uploads `state`'s positions, velocities and external forces (the state this was made
+    /// from, edited on the CPU since: a drag, an undo; the same particles).
+    pub fn write_state(&mut self, state: &State) {
+        let q = &self.gpu.queue;
+        q.write_buffer(&self.x[self.current], 0, &vectors(&state.x, self.precision));
+        q.write_buffer(&self.v[self.current], 0, &vectors(&state.v, self.precision));
+        if state.external_active && self.external_len == state.external.len() {
+            q.write_buffer(&self.external, 0, &vectors(&state.external, self.precision));
+        }
     }
 
     /// Records `steps` steps in one submit, and submits it (it does not wait for the card).
