@@ -47,6 +47,7 @@ def main():
     p.add_argument("--scene", default="pile")
     p.add_argument("--seconds", type=float, default=120.0)
     p.add_argument("--seed", type=int, default=1)
+    p.add_argument("--gpu", action="store_true", help="start the app with its GPU switch on")
     a = p.parse_args()
     if not os.access(a.hooke, os.X_OK):
         print(f"hammer: no hooke binary at {a.hooke}", file=sys.stderr)
@@ -62,7 +63,7 @@ def main():
         time.sleep(0.1)
     env = dict(os.environ, DISPLAY=display)
     log = open("/tmp/hammer-app.log", "w")
-    app = subprocess.Popen([a.hooke, "--scene", a.scene, "--run"], env=env, stdout=log,
+    app = subprocess.Popen([a.hooke, "--scene", a.scene, "--run"] + (["--gpu"] if a.gpu else []), env=env, stdout=log,
                            stderr=subprocess.STDOUT, cwd=ROOT)
     time.sleep(6)
     if app.poll() is not None:

@@ -27,6 +27,10 @@ struct AppArgs {
     /// Start running even if the scene starts paused.
     #[arg(long)]
     run: bool,
+    /// Start with the panel's GPU switch on: the steps run on the graphics card where it runs
+    /// the scene.
+    #[arg(long)]
+    gpu: bool,
     /// Save a screenshot to this PNG after --screenshot-after seconds.
     #[arg(long, hide = true)]
     screenshot: Option<PathBuf>,
@@ -750,6 +754,7 @@ fn open_app(args: AppArgs) -> ExitCode {
         screenshot: args.screenshot.map(|p| (p, args.screenshot_after)),
         exit_after: args.exit_after,
         report: args.report,
+        gpu: args.gpu,
     };
     hooke::ui::run_app(loaded, options);
     ExitCode::SUCCESS

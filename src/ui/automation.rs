@@ -24,6 +24,8 @@ pub struct AppOptions {
     pub exit_after: Option<f64>,
     /// Write a JSON status line to this file twice a second.
     pub report: Option<PathBuf>,
+    /// Start with the panel's GPU switch on.
+    pub gpu: bool,
 }
 
 #[derive(Default)]

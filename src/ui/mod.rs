@@ -41,6 +41,7 @@ impl Plugin for AppPlugin {
     fn build(&self, app: &mut App) {
         let scene = self.scene.clone();
         let start_running = self.options.start_running;
+        let gpu = self.options.gpu;
         app.insert_resource(ClearColor(draw::BACKGROUND))
             .insert_resource(self.options.clone())
             .init_resource::<view::CanvasView>()
@@ -63,6 +64,7 @@ impl Plugin for AppPlugin {
                 if start_running {
                     world.resource_mut::<SimParams>().paused = false;
                 }
+                world.resource_mut::<crate::sim::gpu::CardStep>().wanted = gpu;
             })
             .add_systems(
                 PreUpdate,
