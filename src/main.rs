@@ -234,8 +234,8 @@ struct RunArgs {
     #[arg(long)]
     separate_passes: bool,
     /// Where the steps run: the CPU, or the graphics card (symplectic and explicit Euler with
-    /// obstacles, the ground's contact, dashpots and tearing; a scene that needs more runs on
-    /// the CPU, and the run says why).
+    /// obstacles, the ground's contact, dashpots and tearing; XPBD without contact; a scene
+    /// that needs more runs on the CPU, and the run says why).
     #[arg(long, value_enum, default_value_t = runner::Device::Cpu)]
     device: runner::Device,
     /// The card's number width with --device gpu: f32, or f64 where the adapter has it.

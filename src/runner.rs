@@ -25,8 +25,9 @@ pub enum Device {
     #[default]
     Cpu,
     /// The graphics card (the `gpu` feature): symplectic and explicit Euler with obstacles, the
-    /// ground's contact, dashpots and tearing; a scene that needs more (contact between
-    /// particles, pressure, muscles, plasticity) runs on the CPU and the run says why.
+    /// ground's contact, dashpots and tearing, and XPBD without contact; a scene that needs
+    /// more (contact between particles, pressure, muscles, plasticity) runs on the CPU and the
+    /// run says why.
     Gpu,
 }
 
@@ -436,10 +437,13 @@ mod gpu {
     /// The card to run on and its precision, or `None` (with `on.note` saying why) when the
     /// scene needs what the card does not run; an error when there is no card.
     pub(super) fn card(
-        world: &World,
+        world: &mut World,
         precision: GpuPrecision,
         on: &mut OnDevice,
     ) -> Result<Option<(Gpu, Precision)>, String> {
+        world
+            .run_system_cached(sim::obstacles::gather_obstacles)
+            .map_err(|e| e.to_string())?;
         if let Some(why) = sim::gpu::unsupported(world) {
             on.note = Some(format!("{why}; the steps ran on the CPU"));
             return Ok(None);
@@ -481,7 +485,7 @@ mod gpu {
     use bevy::ecs::world::World;
 
     pub(super) fn card(
-        _: &World,
+        _: &mut World,
         _: GpuPrecision,
         _: &mut OnDevice,
     ) -> Result<Option<std::convert::Infallible>, String> {

@@ -3,7 +3,7 @@
 //!
 //! The card runs symplectic and explicit Euler with gravity, external forces, damping, the
 //! ground, pins, dashpots, tearing, and the obstacles and the ground's contact with friction
-//! and restitution ([`crate::solver::gpu`]). A scene that uses anything else stays on the CPU,
+//! and restitution, and XPBD with the same but for contact ([`crate::solver::gpu`]). A scene that uses anything else stays on the CPU,
 //! and [`unsupported`] says what keeps it there, in words a user reads.
 
 use super::obstacles::Obstacles;
@@ -19,16 +19,25 @@ use bevy::ecs::world::World;
 pub const STEPS_PER_READ: u64 = 1000;
 
 /// What in the world's scene the card does not run, as a sentence; `None` when it runs all of
-/// it. Read after the state is packed ([`super::pack`]).
+/// it. Read after the state is packed ([`super::pack`]) and the obstacles gathered (a tick
+/// gathers them, and [`advance_on_gpu`] does before it asks).
 pub fn unsupported(world: &World) -> Option<String> {
     let params = world.resource::<SimParams>();
     let method = match params.integrator {
         Integrator::SymplecticEuler | Integrator::ExplicitEuler => None,
+        Integrator::Xpbd if params.iterations.xpbd_tolerance > 0.0 => {
+            Some("the GPU runs XPBD with a fixed count of sweeps, not to a tolerance".into())
+        }
+        Integrator::Xpbd => None,
         other => Some(format!(
-            "the GPU runs symplectic and explicit Euler, not {other}"
+            "the GPU runs symplectic Euler, explicit Euler and XPBD, not {other}"
         )),
     };
     let mut what = vec![];
+    let touching = params.contact.is_some() || !world.resource::<Obstacles>().placed().is_empty();
+    if params.integrator == Integrator::Xpbd && touching {
+        what.push("contact under XPBD".to_string());
+    }
     if let Some(c) = params.contact {
         if c.particles && c.radius > 0.0 {
             what.push("contact between particles".to_string());
@@ -55,6 +64,10 @@ pub fn settings(params: &SimParams, steps_per_tick: u64) -> ExplicitSettings {
     ExplicitSettings {
         method: match params.integrator {
             Integrator::ExplicitEuler => ExplicitMethod::ExplicitEuler,
+            Integrator::Xpbd => ExplicitMethod::Xpbd {
+                substeps: params.iterations.xpbd_substeps,
+                sweeps: params.iterations.xpbd_sweeps,
+            },
             _ => ExplicitMethod::SymplecticEuler,
         },
         dt: params.dt,
@@ -147,14 +160,14 @@ pub fn advance_on_gpu(
     precision: Precision,
     steps: u64,
 ) -> Result<u64, String> {
-    if let Some(why) = unsupported(world) {
-        return Err(why);
-    }
-    let params = world.resource::<SimParams>().clone();
     // The obstacles as the tick gathers them from their entities (and writes back after).
     world
         .run_system_cached(super::obstacles::gather_obstacles)
         .map_err(|e| e.to_string())?;
+    if let Some(why) = unsupported(world) {
+        return Err(why);
+    }
+    let params = world.resource::<SimParams>().clone();
     let mut card = {
         let solver = world.resource::<Solver>();
         let obstacles = world.resource::<Obstacles>().placed();

@@ -27,13 +27,20 @@ const OBSTACLE_REALS: usize = 16;
 /// The most work groups along one side of a dispatch.
 const MAX_GROUPS: u32 = 65_535;
 
-/// Which explicit method the kernel runs.
+/// Which method the card runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ExplicitMethod {
     /// Move with the velocity after the kick (and damping and ground).
     SymplecticEuler,
     /// Move with the velocity from before the kick.
     ExplicitEuler,
+    /// XPBD with these substeps a step and Gauss-Seidel sweeps a substep (`xpbd.wgsl`).
+    Xpbd {
+        /// Substeps a step.
+        substeps: u32,
+        /// Sweeps a substep.
+        sweeps: u32,
+    },
 }
 
 /// The step's settings: what `SimParams` says, in the core's words.
@@ -90,10 +97,14 @@ pub struct GpuStep {
     steps: u64,
     /// The step, s (the obstacles' turn a step is written from it).
     dt: f64,
+    /// Some spring has a dashpot.
+    dashpots: bool,
     /// The contact pass, when the scene has obstacles, or a ground with contact set.
     contact: Option<ContactPass>,
     /// Tearing's pass, when tearing is on.
     tear: Option<TearPass>,
+    /// XPBD's passes, when the method is XPBD.
+    xpbd: Option<super::xpbd::XpbdPass>,
     /// Steps since tearing last looked.
     since_tear: u32,
     /// Each link's spring, in the state's spring order.
@@ -279,6 +290,21 @@ impl GpuStep {
                 t,
             )
         });
+        let xpbd = match settings.method {
+            ExplicitMethod::Xpbd { substeps, sweeps } => Some(super::xpbd::XpbdPass::new(
+                gpu,
+                precision,
+                state,
+                (settings.dt, substeps, sweeps),
+                super::xpbd::StateBuffers {
+                    x: &x0,
+                    v: &v0,
+                    w: &w,
+                    external: &external,
+                },
+            )),
+            _ => None,
+        };
         let mut step = GpuStep {
             gpu: gpu.clone(),
             precision,
@@ -299,8 +325,10 @@ impl GpuStep {
             dispatch,
             steps: 0,
             dt: settings.dt,
+            dashpots,
             contact,
             tear,
+            xpbd,
             since_tear: 0,
             link_spring,
         };
@@ -360,6 +388,28 @@ impl GpuStep {
         bytes.extend(reals(&values, self.precision));
         bytes.resize(64, 0);
         self.gpu.queue.write_buffer(&self.params, 0, &bytes);
+        if let Some(x) = &self.xpbd {
+            let hs = settings.dt / f64::from(x.substeps());
+            let floor = settings.ground.filter(|_| settings.contact.is_none());
+            let flags = u32::from(floor.is_some())
+                | (u32::from(external) << 1)
+                | (u32::from(self.dashpots) << 2);
+            x.set(
+                &self.gpu.queue,
+                self.precision,
+                [self.n, across, flags, 0],
+                [
+                    settings.gravity.x,
+                    settings.gravity.y,
+                    hs,
+                    1.0 / hs,
+                    floor.unwrap_or(0.0),
+                    settings.dt,
+                    1.0 / settings.dt,
+                    decay,
+                ],
+            );
+        }
         if let Some(c) = &self.contact {
             let contact = settings.contact.unwrap_or_default();
             let ground = settings.contact.and(settings.ground);
@@ -480,6 +530,18 @@ impl GpuStep {
                 timestamp_writes: None,
             });
             for _ in 0..steps {
+                if let Some(x) = &self.xpbd {
+                    // XPBD works in place on the state's buffers (`x[0]`, `v[0]`).
+                    x.record(&mut pass, self.dispatch);
+                    if let Some(t) = &self.tear {
+                        self.since_tear += 1;
+                        if self.since_tear == t.every {
+                            t.record(&mut pass, self.current, self.dispatch);
+                            self.since_tear = 0;
+                        }
+                    }
+                    continue;
+                }
                 pass.set_pipeline(&self.pipeline);
                 pass.set_bind_group(0, &self.groups[self.current], &[]);
                 pass.dispatch_workgroups(self.dispatch.0, self.dispatch.1, 1);
@@ -807,7 +869,7 @@ fn min_thickness(precision: Precision) -> f64 {
 }
 
 /// Bind group entries: each buffer whole at its binding.
-fn entries<'a>(list: &[(u32, &'a wgpu::Buffer)]) -> Vec<wgpu::BindGroupEntry<'a>> {
+pub(super) fn entries<'a>(list: &[(u32, &'a wgpu::Buffer)]) -> Vec<wgpu::BindGroupEntry<'a>> {
     list.iter()
         .map(|&(binding, b)| wgpu::BindGroupEntry {
             binding,
@@ -817,7 +879,7 @@ fn entries<'a>(list: &[(u32, &'a wgpu::Buffer)]) -> Vec<wgpu::BindGroupEntry<'a>
 }
 
 /// A kernel's module, its `real` alias set to the precision.
-fn shader(
+pub(super) fn shader(
     device: &wgpu::Device,
     source: &str,
     label: &str,
@@ -876,7 +938,7 @@ fn links(state: &State) -> Links {
     (starts, others, records, spring)
 }
 
-fn reals(values: &[f64], precision: Precision) -> Vec<u8> {
+pub(super) fn reals(values: &[f64], precision: Precision) -> Vec<u8> {
     match precision {
         Precision::F32 => values
             .iter()

@@ -286,6 +286,50 @@ impl Xpbd {
     }
 }
 
+/// The constraints as the graphics card's XPBD reads them ([`crate::solver::gpu`]): in the
+/// CPU's colour order, so that its Gauss-Seidel sweeps are the CPU's.
+#[cfg(feature = "gpu")]
+pub(crate) struct Coloured {
+    /// Each constraint's particles.
+    pub ends: Vec<(u32, u32)>,
+    /// Each constraint's rest length, c_a, c_b, α̃ and 1/den at substeps of the given size,
+    /// and its damped projection's γ, c_a, c_b and 1/den (the undamped ones' where the spring
+    /// has no dashpot).
+    pub coefficients: Vec<[f64; 9]>,
+    /// Where each colour starts, and the end.
+    pub colour_starts: Vec<usize>,
+}
+
+/// The CPU's colouring and coefficients of `s`'s springs at substeps of `hs`, for the card.
+#[cfg(feature = "gpu")]
+pub(crate) fn coloured(s: &State, hs: f64) -> Coloured {
+    let mut xp = Xpbd::default();
+    xp.colour(s);
+    xp.prepare(s, hs);
+    let coefficients = xp
+        .constraints
+        .iter()
+        .zip(&xp.multipliers)
+        .enumerate()
+        .map(|(k, (c, m))| {
+            let d = xp.damped.get(k).copied().unwrap_or(Damped {
+                gamma: 0.0,
+                ca: c.ca,
+                cb: c.cb,
+                inv_den: m.inv_den,
+            });
+            [
+                c.rest, c.ca, c.cb, m.alpha, m.inv_den, d.gamma, d.ca, d.cb, d.inv_den,
+            ]
+        })
+        .collect();
+    Coloured {
+        ends: xp.constraints.iter().map(|c| (c.a, c.b)).collect(),
+        coefficients,
+        colour_starts: xp.colour_starts,
+    }
+}
+
 /// Positions written by the team's members in one colour.
 ///
 /// Within a colour no two constraints share a particle, so the members' shares of a colour

@@ -1,0 +1,216 @@
+//! XPBD on the card ([`xpbd.wgsl`]): the CPU's colouring and coefficients
+//! ([`crate::solver::methods::xpbd`]), one dispatch a colour a sweep, so that the sweeps are
+//! the CPU's Gauss-Seidel sweeps in the CPU's order.
+
+use super::context::{Gpu, Precision};
+use super::explicit::{entries, reals, shader};
+use crate::solver::methods::xpbd::coloured;
+use crate::solver::state::State;
+use wgpu::util::DeviceExt;
+
+const SOURCE: &str = include_str!("xpbd.wgsl");
+/// The uniform slots' stride: wgpu's least offset alignment for uniform bindings.
+const SLOT: u64 = 256;
+/// Threads in a work group (the kernel's `@workgroup_size`).
+const GROUP: u32 = 256;
+
+/// XPBD's pipelines, buffers and bind groups for one state.
+#[derive(Debug)]
+pub(super) struct XpbdPass {
+    begin: (wgpu::ComputePipeline, wgpu::BindGroup),
+    predict: (wgpu::ComputePipeline, [wgpu::BindGroup; 2]),
+    project: (wgpu::ComputePipeline, Vec<wgpu::BindGroup>),
+    finish: (wgpu::ComputePipeline, wgpu::BindGroup),
+    params: wgpu::Buffer,
+    /// Constraints in each colour.
+    colours: Vec<u32>,
+    substeps: u32,
+    sweeps: u32,
+}
+
+/// The state's buffers XPBD works on.
+pub(super) struct StateBuffers<'a> {
+    pub x: &'a wgpu::Buffer,
+    pub v: &'a wgpu::Buffer,
+    pub w: &'a wgpu::Buffer,
+    pub external: &'a wgpu::Buffer,
+}
+
+impl XpbdPass {
+    pub(super) fn new(
+        gpu: &Gpu,
+        precision: Precision,
+        state: &State,
+        (dt, substeps, sweeps): (f64, u32, u32),
+        buffers: StateBuffers,
+    ) -> XpbdPass {
+        let device = &gpu.device;
+        let substeps = substeps.max(1);
+        let sweeps = sweeps.max(1);
+        let hs = dt / substeps as f64;
+        let c = coloured(state, hs);
+        let module = shader(device, SOURCE, "hooke xpbd", precision);
+        let pipeline = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: None,
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let storage = wgpu::BufferUsages::STORAGE;
+        let init = |label: &str, contents: Vec<u8>, usage| {
+            let mut contents = contents;
+            contents.resize(contents.len().max(16), 0);
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: &contents,
+                usage,
+            })
+        };
+        let n = state.particle_count();
+        let zeros = vec![0u8; n * 2 * precision.bytes()];
+        let pos = init("xpbd positions", zeros.clone(), storage);
+        let prev = init("xpbd substep starts", zeros, storage);
+        let ends: Vec<u8> = c
+            .ends
+            .iter()
+            .flat_map(|&(a, b)| [a.to_le_bytes(), b.to_le_bytes()].concat())
+            .collect();
+        let ends = init("xpbd ends", ends, storage);
+        let flat: Vec<f64> = c
+            .coefficients
+            .iter()
+            .flat_map(|k| k.iter().copied().chain([0.0]))
+            .collect();
+        let coef = init("xpbd coefficients", reals(&flat, precision), storage);
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("xpbd settings"),
+            size: 96,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        // The slots: colour c's first sweep at 2c, its later sweeps at 2c + 1; the first
+        // substep's prediction, then the others'.
+        let colours: Vec<u32> = c
+            .colour_starts
+            .windows(2)
+            .map(|w| (w[1] - w[0]) as u32)
+            .collect();
+        let count = colours.len();
+        let mut slots = vec![0u8; (2 * count + 2) * SLOT as usize];
+        let mut put = |at: usize, values: [u32; 4]| {
+            let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+            slots[at * SLOT as usize..at * SLOT as usize + 16].copy_from_slice(&bytes);
+        };
+        for (k, w) in c.colour_starts.windows(2).enumerate() {
+            put(2 * k, [w[0] as u32, w[1] as u32, 1, 0]);
+            put(2 * k + 1, [w[0] as u32, w[1] as u32, 0, 0]);
+        }
+        put(2 * count, [0, 0, 1, 0]);
+        put(2 * count + 1, [0, 0, 0, 0]);
+        let slots = init("xpbd slots", slots, wgpu::BufferUsages::UNIFORM);
+        let slot = |k: usize| {
+            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &slots,
+                offset: k as u64 * SLOT,
+                size: wgpu::BufferSize::new(16),
+            })
+        };
+        let group = |pipeline: &wgpu::ComputePipeline, list: &[(u32, &wgpu::Buffer)], s| {
+            let mut e = entries(list);
+            if let Some(k) = s {
+                e.push(wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: slot(k),
+                });
+            }
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("hooke xpbd"),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &e,
+            })
+        };
+        let StateBuffers { x, v, w, external } = buffers;
+        let begin = pipeline("begin");
+        let begin_group = group(&begin, &[(0, &params), (2, &pos), (5, x)], None);
+        let predict = pipeline("predict");
+        let predicting = [
+            (0, &params),
+            (2, &pos),
+            (3, &prev),
+            (4, v),
+            (6, w),
+            (7, external),
+        ];
+        let predict_groups = [
+            group(&predict, &predicting, Some(2 * count)),
+            group(&predict, &predicting, Some(2 * count + 1)),
+        ];
+        let project = pipeline("project");
+        let projecting = [(0, &params), (2, &pos), (3, &prev), (8, &ends), (9, &coef)];
+        let project_groups = (0..2 * count)
+            .map(|k| group(&project, &projecting, Some(k)))
+            .collect();
+        let finish = pipeline("finish");
+        let finish_group = group(
+            &finish,
+            &[(0, &params), (2, &pos), (3, &prev), (4, v), (5, x), (6, w)],
+            None,
+        );
+        XpbdPass {
+            begin: (begin, begin_group),
+            predict: (predict, predict_groups),
+            project: (project, project_groups),
+            finish: (finish, finish_group),
+            params,
+            colours,
+            substeps,
+            sweeps,
+        }
+    }
+
+    /// Writes the step's settings: the header (particles, the dispatch's row, flags) and the
+    /// numbers, as `xpbd.wgsl`'s `Params` lays them out.
+    pub(super) fn set(
+        &self,
+        queue: &wgpu::Queue,
+        precision: Precision,
+        header: [u32; 4],
+        values: [f64; 8],
+    ) {
+        let mut bytes: Vec<u8> = header.iter().flat_map(|v| v.to_le_bytes()).collect();
+        bytes.extend(reals(&values, precision));
+        bytes.resize(96, 0);
+        queue.write_buffer(&self.params, 0, &bytes);
+    }
+
+    /// The substeps per step and the substep's size for `dt`.
+    pub(super) fn substeps(&self) -> u32 {
+        self.substeps
+    }
+
+    /// Records one step.
+    pub(super) fn record(&self, pass: &mut wgpu::ComputePass, particles: (u32, u32)) {
+        let run = |pass: &mut wgpu::ComputePass, p: &wgpu::ComputePipeline, g, d: (u32, u32)| {
+            pass.set_pipeline(p);
+            pass.set_bind_group(0, g, &[]);
+            pass.dispatch_workgroups(d.0, d.1, 1);
+        };
+        run(pass, &self.begin.0, &self.begin.1, particles);
+        for substep in 0..self.substeps {
+            let first = usize::from(substep != 0);
+            run(pass, &self.predict.0, &self.predict.1[first], particles);
+            for sweep in 0..self.sweeps {
+                for (c, &size) in self.colours.iter().enumerate() {
+                    let group = &self.project.1[2 * c + usize::from(sweep != 0)];
+                    let groups = size.div_ceil(GROUP).max(1);
+                    run(pass, &self.project.0, group, (groups, 1));
+                }
+            }
+        }
+        run(pass, &self.finish.0, &self.finish.1, particles);
+    }
+}
