@@ -459,7 +459,18 @@ fn work_precision(out: &std::path::Path, quick: bool) -> ExitCode {
         return fail(format!("cannot create {}: {e}", out.display()));
     }
     let problems = wp::problems(quick);
-    let report = match wp::run(&problems, |what| eprintln!("  {what}")) {
+    // The card's f32 points where this build and this machine have a card.
+    #[cfg(feature = "gpu")]
+    let gpu = match hooke::solver::gpu::Gpu::open() {
+        Ok(g) => Some(g),
+        Err(e) => {
+            eprintln!("  {e}: the report leaves the card's points out");
+            None
+        }
+    };
+    #[cfg(not(feature = "gpu"))]
+    let gpu: Option<std::convert::Infallible> = None;
+    let report = match wp::run(&problems, gpu.as_ref(), |what| eprintln!("  {what}")) {
         Ok(r) => r,
         Err(e) => return fail(e),
     };

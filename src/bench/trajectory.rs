@@ -56,6 +56,70 @@ pub fn run(scene: &Scene, t_end: f64, checkpoints: u64) -> Result<Trajectory, St
     Ok(out)
 }
 
+/// [`run`] on the graphics card in `precision`: the state uploaded once, each checkpoint's
+/// steps one submit, the positions read back at each checkpoint (the wall time includes the
+/// read, which waits for the card). Fails when the card does not run the scene.
+#[cfg(feature = "gpu")]
+pub fn run_on_card(
+    scene: &Scene,
+    t_end: f64,
+    checkpoints: u64,
+    gpu: &crate::solver::gpu::Gpu,
+    precision: crate::solver::gpu::Precision,
+) -> Result<Trajectory, String> {
+    use crate::solver::gpu::GpuStep;
+    let steps = (t_end / scene.dt).round() as u64;
+    if steps == 0 || !steps.is_multiple_of(checkpoints) {
+        return Err(format!(
+            "dt = {} does not divide T = {t_end} into a multiple of {checkpoints} steps",
+            scene.dt
+        ));
+    }
+    let loaded = LoadedScene::from_scene(scene.clone(), None).map_err(|e| e.to_string())?;
+    let mut app = crate::running_app(&loaded)?;
+    let world = app.world_mut();
+    world
+        .run_system_cached(sim::obstacles::gather_obstacles)
+        .map_err(|e| e.to_string())?;
+    if let Some(why) = sim::gpu::unsupported(world) {
+        return Err(why);
+    }
+    let params = world.resource::<sim::SimParams>().clone();
+    let settings = sim::gpu::settings(&params, steps);
+    let mut card = {
+        let obstacles = world.resource::<sim::Obstacles>().placed();
+        GpuStep::new(
+            gpu,
+            world.resource::<Solver>(),
+            &settings,
+            obstacles,
+            precision,
+        )
+        .map_err(|e| e.to_string())?
+    };
+    let mut out = Trajectory {
+        checkpoints: vec![],
+        wall_s: 0.0,
+        steps: 0,
+        finite: true,
+        stats: Default::default(),
+    };
+    let mut solver = world.resource_mut::<Solver>();
+    for _ in 0..checkpoints {
+        let start = Instant::now();
+        card.run((steps / checkpoints) as u32);
+        card.read_into(&mut solver).map_err(|e| e.to_string())?;
+        out.wall_s += start.elapsed().as_secs_f64();
+        out.steps += steps / checkpoints;
+        out.checkpoints.push(solver.x.clone());
+        if !solver.state_is_finite() {
+            out.finite = false;
+            break;
+        }
+    }
+    Ok(out)
+}
+
 /// The largest distance of any particle from its reference position over all checkpoints;
 /// infinite if the run blew up.
 pub fn max_position_error(run: &Trajectory, reference: &[Vec<DVec2>]) -> f64 {

@@ -169,8 +169,27 @@ fn with(scene: &Scene, integrator: Integrator, dt: f64) -> Scene {
     }
 }
 
-/// Runs the study; `progress` is told what runs.
-pub fn run(problems: &[Problem], mut progress: impl FnMut(&str)) -> Result<Report, String> {
+/// The methods the card runs, whose f32 points the report shows beside the CPU's f64 ones.
+pub const ON_THE_CARD: [Integrator; 2] = [Integrator::SymplecticEuler, Integrator::Xpbd];
+
+/// A card row's label: the method's name and where it ran.
+pub fn card_label(i: Integrator) -> String {
+    format!("{} card f32", i.cli_name())
+}
+
+/// The graphics card the study also runs [`ON_THE_CARD`] on, in f32 (the `gpu` feature).
+#[cfg(feature = "gpu")]
+pub type Card<'a> = Option<&'a crate::solver::gpu::Gpu>;
+/// Without the `gpu` feature there is no card.
+#[cfg(not(feature = "gpu"))]
+pub type Card<'a> = Option<&'a std::convert::Infallible>;
+
+/// Runs the study; `progress` is told what runs. With a card, [`ON_THE_CARD`] run there too.
+pub fn run(
+    problems: &[Problem],
+    card: Card,
+    mut progress: impl FnMut(&str),
+) -> Result<Report, String> {
     let mut rows = vec![];
     let mut notes = vec![];
     for p in problems {
@@ -208,6 +227,36 @@ pub fn run(problems: &[Problem], mut progress: impl FnMut(&str)) -> Result<Repor
                 rows.push(Row::of(p.name, integrator.cli_name(), dt, &t, error));
             }
         }
+        #[cfg(feature = "gpu")]
+        if let Some(gpu) = card {
+            for integrator in ON_THE_CARD {
+                for &dt in &p.dts {
+                    progress(&format!(
+                        "{}: {integrator} on the card, dt = {dt:e}",
+                        p.name
+                    ));
+                    let t = trajectory::run_on_card(
+                        &with(&p.scene, integrator, dt),
+                        p.t_end,
+                        CHECKPOINTS,
+                        gpu,
+                        crate::solver::gpu::Precision::F32,
+                    )?;
+                    let error = max_position_error(&t, &reference);
+                    rows.push(Row::of(p.name, &card_label(integrator), dt, &t, error));
+                }
+            }
+        }
+    }
+    if let Some(gpu) = card {
+        #[cfg(feature = "gpu")]
+        notes.push(format!(
+            "On the card: {} in f32 on {} (the CPU's rows are f64).",
+            crate::readable::list(&ON_THE_CARD.map(|i| i.cli_name())),
+            gpu.adapter()
+        ));
+        #[cfg(not(feature = "gpu"))]
+        match *gpu {}
     }
     Ok(Report { rows, notes })
 }
@@ -283,8 +332,54 @@ pub fn markdown(report: &Report, command: &str) -> String {
             }
             s.push('\n');
         }
+        card_table(&mut s, &rows);
     }
     s
+}
+
+/// The price of f32: the methods the card runs, their CPU f64 error beside their card f32
+/// error at each dt (nothing when the study ran without a card).
+fn card_table(s: &mut String, rows: &[&Row]) {
+    let on_card = |i: Integrator| card_label(i);
+    if !rows
+        .iter()
+        .any(|r| ON_THE_CARD.iter().any(|&i| r.integrator == on_card(i)))
+    {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "\nOn the card, f32 against the CPU's f64 (error / wall time):\n"
+    );
+    let mut labels = vec![];
+    for i in ON_THE_CARD {
+        labels.push(format!("{} (CPU f64)", i.cli_name()));
+        labels.push(on_card(i));
+    }
+    table_header(s, &[("dt (s)", "---:")], labels.iter());
+    let mut dts: Vec<f64> = rows.iter().map(|r| r.dt).collect();
+    dts.sort_by(|a, b| b.total_cmp(a));
+    dts.dedup();
+    for dt in dts {
+        let _ = write!(s, "| {dt:.3e} |");
+        for i in ON_THE_CARD {
+            for label in [i.cli_name().to_string(), on_card(i)] {
+                let cell = rows
+                    .iter()
+                    .find(|r| r.dt == dt && r.integrator == label)
+                    .map(|r| {
+                        if r.stable {
+                            format!("{:.2e} / {}", r.error, fmt_time(r.wall_s))
+                        } else {
+                            "unstable".to_string()
+                        }
+                    })
+                    .unwrap_or_default();
+                let _ = write!(s, " {cell} |");
+            }
+        }
+        s.push('\n');
+    }
 }
 
 /// A markdown table's header: the leading columns as (title, alignment rule), then one
