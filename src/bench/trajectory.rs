@@ -22,8 +22,13 @@ pub struct Trajectory {
     pub stats: crate::sim::SolveStats,
 }
 
-/// Runs `scene` to time `t_end` in steps of the scene's dt, recording `checkpoints` states.
-pub fn run(scene: &Scene, t_end: f64, checkpoints: u64) -> Result<Trajectory, String> {
+/// A run's start: the scene loaded and running, its steps, and an empty trajectory; an error
+/// when dt does not divide `t_end` into a multiple of `checkpoints` steps.
+fn start(
+    scene: &Scene,
+    t_end: f64,
+    checkpoints: u64,
+) -> Result<(bevy::app::App, u64, Trajectory), String> {
     let steps = (t_end / scene.dt).round() as u64;
     if steps == 0 || !steps.is_multiple_of(checkpoints) {
         return Err(format!(
@@ -32,15 +37,21 @@ pub fn run(scene: &Scene, t_end: f64, checkpoints: u64) -> Result<Trajectory, St
         ));
     }
     let loaded = LoadedScene::from_scene(scene.clone(), None).map_err(|e| e.to_string())?;
-    let mut app = crate::running_app(&loaded)?;
-    let world = app.world_mut();
-    let mut out = Trajectory {
+    let app = crate::running_app(&loaded)?;
+    let out = Trajectory {
         checkpoints: vec![],
         wall_s: 0.0,
         steps: 0,
         finite: true,
         stats: Default::default(),
     };
+    Ok((app, steps, out))
+}
+
+/// Runs `scene` to time `t_end` in steps of the scene's dt, recording `checkpoints` states.
+pub fn run(scene: &Scene, t_end: f64, checkpoints: u64) -> Result<Trajectory, String> {
+    let (mut app, steps, mut out) = start(scene, t_end, checkpoints)?;
+    let world = app.world_mut();
     for _ in 0..checkpoints {
         let start = Instant::now();
         let taken = sim::advance(world, steps / checkpoints);
@@ -68,15 +79,7 @@ pub fn run_on_card(
     precision: crate::solver::gpu::Precision,
 ) -> Result<Trajectory, String> {
     use crate::solver::gpu::GpuStep;
-    let steps = (t_end / scene.dt).round() as u64;
-    if steps == 0 || !steps.is_multiple_of(checkpoints) {
-        return Err(format!(
-            "dt = {} does not divide T = {t_end} into a multiple of {checkpoints} steps",
-            scene.dt
-        ));
-    }
-    let loaded = LoadedScene::from_scene(scene.clone(), None).map_err(|e| e.to_string())?;
-    let mut app = crate::running_app(&loaded)?;
+    let (mut app, steps, mut out) = start(scene, t_end, checkpoints)?;
     let world = app.world_mut();
     world
         .run_system_cached(sim::obstacles::gather_obstacles)
@@ -96,13 +99,6 @@ pub fn run_on_card(
             precision,
         )
         .map_err(|e| e.to_string())?
-    };
-    let mut out = Trajectory {
-        checkpoints: vec![],
-        wall_s: 0.0,
-        steps: 0,
-        finite: true,
-        stats: Default::default(),
     };
     let mut solver = world.resource_mut::<Solver>();
     for _ in 0..checkpoints {

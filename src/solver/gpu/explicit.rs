@@ -196,14 +196,7 @@ impl GpuStep {
             SOURCE.to_string()
         };
         let module = shader(device, &source, "hooke explicit step", precision);
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("hooke explicit step"),
-            layout: None,
-            module: &module,
-            entry_point: Some("step"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipeline = pipeline(device, &module, "step");
         let storage = wgpu::BufferUsages::STORAGE;
         let moving = storage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
         // A buffer is never empty (a scene without springs still binds its links): at least
@@ -518,52 +511,35 @@ impl GpuStep {
         if steps == 0 {
             return;
         }
-        let mut encoder = self
-            .gpu
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("hooke steps"),
-            });
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("hooke steps"),
-                timestamp_writes: None,
-            });
+        let gpu = self.gpu.clone();
+        submit(&gpu, "hooke steps", |pass| {
             for _ in 0..steps {
                 if let Some(x) = &self.xpbd {
                     // XPBD works in place on the state's buffers (`x[0]`, `v[0]`).
-                    x.record(&mut pass, self.dispatch);
-                    if let Some(t) = &self.tear {
-                        self.since_tear += 1;
-                        if self.since_tear == t.every {
-                            t.record(&mut pass, self.current, self.dispatch);
-                            self.since_tear = 0;
-                        }
+                    x.record(pass, self.dispatch);
+                } else {
+                    dispatch(
+                        pass,
+                        &self.pipeline,
+                        &self.groups[self.current],
+                        self.dispatch,
+                    );
+                    if let Some(c) = &self.contact {
+                        dispatch(pass, &c.collide, &c.groups[self.current], self.dispatch);
+                        let obstacles = ((c.count as u32).div_ceil(64).max(1), 1);
+                        dispatch(pass, &c.advance, &c.advance_group, obstacles);
                     }
-                    continue;
+                    self.current = 1 - self.current;
                 }
-                pass.set_pipeline(&self.pipeline);
-                pass.set_bind_group(0, &self.groups[self.current], &[]);
-                pass.dispatch_workgroups(self.dispatch.0, self.dispatch.1, 1);
-                if let Some(c) = &self.contact {
-                    pass.set_pipeline(&c.collide);
-                    pass.set_bind_group(0, &c.groups[self.current], &[]);
-                    pass.dispatch_workgroups(self.dispatch.0, self.dispatch.1, 1);
-                    pass.set_pipeline(&c.advance);
-                    pass.set_bind_group(0, &c.advance_group, &[]);
-                    pass.dispatch_workgroups((c.count as u32).div_ceil(64).max(1), 1, 1);
-                }
-                self.current = 1 - self.current;
                 if let Some(t) = &self.tear {
                     self.since_tear += 1;
                     if self.since_tear == t.every {
-                        t.record(&mut pass, self.current, self.dispatch);
+                        dispatch(pass, &t.pipeline, &t.groups[self.current], self.dispatch);
                         self.since_tear = 0;
                     }
                 }
             }
-        }
-        self.gpu.queue.submit([encoder.finish()]);
+        });
         self.steps += u64::from(steps);
     }
 
@@ -574,20 +550,9 @@ impl GpuStep {
         if self.since_tear == 0 {
             return;
         }
-        let mut encoder = self
-            .gpu
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("hooke tear"),
-            });
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("hooke tear"),
-                timestamp_writes: None,
-            });
-            t.record(&mut pass, self.current, self.dispatch);
-        }
-        self.gpu.queue.submit([encoder.finish()]);
+        submit(&self.gpu, "hooke tear", |pass| {
+            dispatch(pass, &t.pipeline, &t.groups[self.current], self.dispatch);
+        });
         self.since_tear = 0;
     }
 
@@ -726,14 +691,7 @@ impl TearPass {
     ) -> TearPass {
         let device = &gpu.device;
         let module = shader(device, source, "hooke tear", precision);
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("hooke tear"),
-            layout: None,
-            module: &module,
-            entry_point: Some("tear"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipeline = pipeline(device, &module, "tear");
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tear settings"),
             size: 32,
@@ -772,13 +730,6 @@ impl TearPass {
             every: settings.every.max(1),
         }
     }
-
-    /// Records a look at the positions in `x[current]`.
-    fn record(&self, pass: &mut wgpu::ComputePass, current: usize, dispatch: (u32, u32)) {
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &self.groups[current], &[]);
-        pass.dispatch_workgroups(dispatch.0, dispatch.1, 1);
-    }
 }
 
 impl ContactPass {
@@ -792,17 +743,10 @@ impl ContactPass {
     ) -> ContactPass {
         let device = &gpu.device;
         let module = shader(device, CONTACT, "hooke contact", precision);
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        let (collide, advance) = (pipeline("collide"), pipeline("advance"));
+        let (collide, advance) = (
+            pipeline(device, &module, "collide"),
+            pipeline(device, &module, "advance"),
+        );
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("contact settings"),
             size: 96,
@@ -866,6 +810,49 @@ fn min_thickness(precision: Precision) -> f64 {
         Precision::F32 => 1e-5,
         Precision::F64 => MIN_THICKNESS,
     }
+}
+
+/// A compute pipeline for one entry point of `module`, its layout the one the kernel implies.
+pub(super) fn pipeline(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+) -> wgpu::ComputePipeline {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: None,
+        module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
+/// One compute pass, recorded by `record`, submitted (not waited for).
+pub(super) fn submit(gpu: &Gpu, label: &str, record: impl FnOnce(&mut wgpu::ComputePass)) {
+    let mut encoder = gpu
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
+    {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(label),
+            timestamp_writes: None,
+        });
+        record(&mut pass);
+    }
+    gpu.queue.submit([encoder.finish()]);
+}
+
+/// One dispatch of `pipeline` with `group` over `groups` work groups.
+pub(super) fn dispatch(
+    pass: &mut wgpu::ComputePass,
+    pipeline: &wgpu::ComputePipeline,
+    group: &wgpu::BindGroup,
+    groups: (u32, u32),
+) {
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, group, &[]);
+    pass.dispatch_workgroups(groups.0, groups.1, 1);
 }
 
 /// Bind group entries: each buffer whole at its binding.

@@ -3,7 +3,7 @@
 //! the CPU's Gauss-Seidel sweeps in the CPU's order.
 
 use super::context::{Gpu, Precision};
-use super::explicit::{entries, reals, shader};
+use super::explicit::{dispatch, entries, pipeline, reals, shader};
 use crate::solver::methods::xpbd::coloured;
 use crate::solver::state::State;
 use wgpu::util::DeviceExt;
@@ -50,16 +50,7 @@ impl XpbdPass {
         let hs = dt / substeps as f64;
         let c = coloured(state, hs);
         let module = shader(device, SOURCE, "hooke xpbd", precision);
-        let pipeline = |entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let pipeline = |entry: &str| pipeline(device, &module, entry);
         let storage = wgpu::BufferUsages::STORAGE;
         let init = |label: &str, contents: Vec<u8>, usage| {
             let mut contents = contents;
@@ -194,11 +185,7 @@ impl XpbdPass {
 
     /// Records one step.
     pub(super) fn record(&self, pass: &mut wgpu::ComputePass, particles: (u32, u32)) {
-        let run = |pass: &mut wgpu::ComputePass, p: &wgpu::ComputePipeline, g, d: (u32, u32)| {
-            pass.set_pipeline(p);
-            pass.set_bind_group(0, g, &[]);
-            pass.dispatch_workgroups(d.0, d.1, 1);
-        };
+        let run = dispatch;
         run(pass, &self.begin.0, &self.begin.1, particles);
         for substep in 0..self.substeps {
             let first = usize::from(substep != 0);
