@@ -722,12 +722,16 @@ fn gpu(out: &std::path::Path, widths: Vec<usize>, budget: f64, repeat: usize) ->
         Ok(r) => r,
         Err(e) => return fail(e),
     };
+    let frames = match gpu::run_frames(&card, &widths, budget, repeat, |w| eprintln!("  {w}")) {
+        Ok(r) => r,
+        Err(e) => return fail(e),
+    };
     let list: Vec<String> = widths.iter().map(|w| w.to_string()).collect();
     let command = format!(
         "hooke bench gpu --widths {} --budget {budget:e} --repeat {repeat}",
         list.join(",")
     );
-    let md = gpu::markdown(&rows, &machine, &command);
+    let md = gpu::markdown(&rows, &machine, &command) + &gpu::frames_markdown(&frames);
     write_report(out, &[("gpu.csv", &gpu::csv(&rows)), ("gpu.md", &md)])
 }
 

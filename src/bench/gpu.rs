@@ -154,6 +154,143 @@ pub fn run(
     Ok(rows)
 }
 
+/// One figure of XPBD at a frame's step: the time a step takes on the CPU or the card.
+#[derive(Debug, Clone)]
+pub struct FrameRow {
+    /// Particles per side.
+    pub width: usize,
+    /// Springs.
+    pub springs: usize,
+    /// "CPU" or the adapter's name.
+    pub device: String,
+    /// "f64" on the CPU; the card's precision.
+    pub precision: &'static str,
+    /// Steps timed (all in one submit on the card).
+    pub steps: u64,
+    /// The best of the runs' wall times, s (NaN when the cloth does not fit the card).
+    pub wall_s: f64,
+}
+
+impl FrameRow {
+    /// Milliseconds a step.
+    pub fn ms_per_step(&self) -> f64 {
+        self.wall_s * 1e3 / self.steps as f64
+    }
+}
+
+/// The cloths of [`run`] (their top rows pinned) under XPBD at dt = 1/60 s with its default 10
+/// substeps and one sweep, on the CPU and on the card in f32: `budget` spring projections a
+/// figure (at least 2 steps), the best of `repeat` runs.
+pub fn run_frames(
+    gpu: &Gpu,
+    widths: &[usize],
+    budget: f64,
+    repeat: usize,
+    mut progress: impl FnMut(&str),
+) -> Result<Vec<FrameRow>, String> {
+    let mut rows = vec![];
+    for &w in widths {
+        progress(&format!("cloth{w}: XPBD at 1/60 s, loading"));
+        let loaded = LoadedScene::from_scene(perf::cloth(w), None).map_err(|e| e.to_string())?;
+        let mut app = crate::running_app(&loaded)?;
+        let world = app.world_mut();
+        {
+            let mut p = world.resource_mut::<SimParams>();
+            p.integrator = Integrator::Xpbd;
+            p.dt = 1.0 / 60.0;
+        }
+        let params = world.resource::<SimParams>().clone();
+        let springs = world.resource::<Solver>().spring_count();
+        let substeps = params.iterations.xpbd_substeps.max(1);
+        let steps =
+            ((budget / (springs as f64 * f64::from(substeps))).round() as u64).clamp(2, 600);
+        progress(&format!("cloth{w}: XPBD on the CPU, {steps} steps"));
+        sim::advance(world, 1);
+        let mut best = f64::INFINITY;
+        for _ in 0..repeat.max(1) {
+            let start = Instant::now();
+            sim::advance(world, steps);
+            best = best.min(start.elapsed().as_secs_f64());
+        }
+        rows.push(FrameRow {
+            width: w,
+            springs,
+            device: "CPU".into(),
+            precision: "f64",
+            steps,
+            wall_s: best,
+        });
+        let settings = sim::gpu::settings(&params, steps);
+        let made = GpuStep::new(
+            gpu,
+            &world.resource::<Solver>().state,
+            &settings,
+            &[],
+            crate::solver::gpu::Precision::F32,
+        );
+        let mut best = f64::NAN;
+        match made {
+            Ok(mut card) => {
+                progress(&format!("cloth{w}: XPBD on the card, {steps} steps"));
+                card.run(1);
+                card.finish().map_err(|e| e.to_string())?;
+                best = f64::INFINITY;
+                for _ in 0..repeat.max(1) {
+                    let start = Instant::now();
+                    card.run(steps as u32);
+                    card.finish().map_err(|e| e.to_string())?;
+                    best = best.min(start.elapsed().as_secs_f64());
+                }
+            }
+            Err(e @ GpuError::TooLarge(_)) => progress(&format!("cloth{w}: {e}")),
+            Err(e) => return Err(e.to_string()),
+        }
+        rows.push(FrameRow {
+            width: w,
+            springs,
+            device: gpu.adapter(),
+            precision: "f32",
+            steps,
+            wall_s: best,
+        });
+    }
+    Ok(rows)
+}
+
+/// XPBD's table: milliseconds a step and the share of a 1/60 s frame it takes.
+pub fn frames_markdown(rows: &[FrameRow]) -> String {
+    let mut s = String::from(
+        "\n## XPBD at a frame's step\n\nThe same cloths under XPBD at dt = 1/60 s (10 substeps, one \
+         sweep each, 8 colours), without contact: a step's time on the CPU (f64, all threads) and \
+         on the card (f32, all steps in one submit). Real time needs a step under 16.7 ms.\n\n\
+         | cloth | springs | device | precision | steps | ms a step | real-time factor |\n\
+         |---|---:|---|---|---:|---:|---:|\n",
+    );
+    for r in rows {
+        if r.wall_s.is_nan() {
+            s += &format!(
+                "| {w}² | {:.2} M | {} | {} | – | does not fit | – |\n",
+                r.springs as f64 / 1e6,
+                r.device,
+                r.precision,
+                w = r.width
+            );
+            continue;
+        }
+        s += &format!(
+            "| {w}² | {:.2} M | {} | {} | {} | {:.2} | {:.2}× |\n",
+            r.springs as f64 / 1e6,
+            r.device,
+            r.precision,
+            r.steps,
+            r.ms_per_step(),
+            (1000.0 / 60.0) / r.ms_per_step(),
+            w = r.width
+        );
+    }
+    s
+}
+
 /// The rows as CSV.
 pub fn csv(rows: &[Row]) -> String {
     let mut s = String::from(

@@ -159,10 +159,16 @@ impl GpuStep {
         let limits = gpu.device.limits();
         // The largest buffer: the link records, their indices, or the particles' vectors.
         let width = if dashpots { 4 } else { 2 };
+        // XPBD's constraints: ten numbers each (`xpbd.wgsl`'s `Coefficients`).
+        let xpbd = match settings.method {
+            ExplicitMethod::Xpbd { .. } => state.spring_count() * 10 * precision.bytes(),
+            _ => 0,
+        };
         let widest = [
             others.len() * width * precision.bytes(),
             (n + 1 + others.len()) * 4,
             n * 2 * precision.bytes(),
+            xpbd,
         ]
         .into_iter()
         .max()
