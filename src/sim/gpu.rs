@@ -103,7 +103,7 @@ fn after_submit(
             torn.push(i);
         }
     }
-    let contacts = card.contacts().map_err(|e| e.to_string())?;
+    let contacts = card.contacts();
     {
         let mut o = world.resource_mut::<Obstacles>();
         for p in &mut o.placed {

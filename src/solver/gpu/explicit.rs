@@ -99,6 +99,8 @@ pub struct GpuStep {
     dt: f64,
     /// Some spring has a dashpot.
     dashpots: bool,
+    /// The last step's contacts, as the last read brought them.
+    contacts: std::sync::atomic::AtomicUsize,
     /// The contact pass, when the scene has obstacles, or a ground with contact set.
     contact: Option<ContactPass>,
     /// Tearing's pass, when tearing is on.
@@ -325,6 +327,7 @@ impl GpuStep {
             steps: 0,
             dt: settings.dt,
             dashpots,
+            contacts: Default::default(),
             contact,
             tear,
             xpbd,
@@ -492,13 +495,10 @@ impl GpuStep {
             .write_buffer(&c.obstacles, 0, &reals(&values, self.precision));
     }
 
-    /// Contacts resolved in the last step run (0 without a contact pass), read from the card.
-    pub fn contacts(&self) -> Result<usize, GpuError> {
-        let Some(c) = &self.contact else {
-            return Ok(0);
-        };
-        let bytes = self.read(&[(&c.counter, 4, 4)])?;
-        Ok(u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]) as usize)
+    /// Contacts resolved in the last step run (0 without a contact pass), as the last
+    /// [`Self::read_into`] read them with the state.
+    pub fn contacts(&self) -> usize {
+        self.contacts.load(std::sync::atomic::Ordering::Relaxed)
     }
 
     /// Uploads `state`'s positions, velocities and external forces (the state this was made
@@ -604,11 +604,21 @@ impl GpuStep {
     /// positions.
     pub fn read_into(&self, state: &mut State) -> Result<(), GpuError> {
         let bytes = (self.n as u64) * 2 * self.precision.bytes() as u64;
-        let view = self.read(&[
+        // The last step's contact count comes back in the same copy, a wait saved.
+        let mut ranges = vec![
             (&self.x[self.current], 0, bytes),
             (&self.v[self.current], 0, bytes),
-        ])?;
-        let values = from_bytes(&view, self.precision);
+        ];
+        if let Some(c) = &self.contact {
+            ranges.push((&c.counter, 0, 8));
+        }
+        let view = self.read(&ranges)?;
+        let (state_bytes, counter) = view.split_at((2 * bytes) as usize);
+        if let [_, _, _, _, a, b, c, d] = *counter {
+            let n = u32::from_le_bytes([a, b, c, d]) as usize;
+            self.contacts.store(n, std::sync::atomic::Ordering::Relaxed);
+        }
+        let values = from_bytes(state_bytes, self.precision);
         let n = self.n as usize;
         // A pinned particle does not move on the card: it keeps its f64 position, which
         // the f32 copy would round.
