@@ -383,6 +383,11 @@ fn run(args: RunArgs) -> ExitCode {
     if let Some(note) = &r.device_note {
         eprintln!("hooke: {note}");
     }
+    if args.profile && r.device == runner::Device::Gpu {
+        eprintln!(
+            "hooke: --profile times the CPU's passes; the steps ran on the GPU, untimed by pass"
+        );
+    }
     if args.json {
         match serde_json::to_string(r) {
             Ok(s) => println!("{s}"),

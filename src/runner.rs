@@ -406,8 +406,13 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
         cg_iterations_per_step: solve.cg_iterations_per_step,
         iterations: params.iterations,
         solve,
-        pass_seconds: world.get_resource::<sim::PassTimes>().cloned(),
-        contact_seconds: world.get_resource::<sim::PassTimes>().map(|t| t.contact),
+        // The passes' times are the CPU's: none when the steps ran on the card.
+        pass_seconds: (on.device == Device::Cpu)
+            .then(|| world.get_resource::<sim::PassTimes>().cloned())
+            .flatten(),
+        contact_seconds: (on.device == Device::Cpu)
+            .then(|| world.get_resource::<sim::PassTimes>().map(|t| t.contact))
+            .flatten(),
         device: on.device,
         adapter: on.adapter,
         precision: on.precision,

@@ -685,4 +685,19 @@ fn run_on_the_gpu_reports_the_adapter_or_why_not() {
         &hooke(&["run", "--scene", "cloth32", "--device", "tpu"]),
         "--device",
     );
+    // --profile times the CPU's passes: on the card there are none to time, and it says so.
+    let o = hooke(&[
+        "run",
+        "--scene",
+        "cloth32",
+        "--steps",
+        "10",
+        "--device",
+        "gpu",
+        "--profile",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(json(&o).get("pass_seconds").is_none());
+    assert!(stderr(&o).contains("--profile"), "{}", stderr(&o));
 }
