@@ -101,6 +101,8 @@ pub struct GpuStep {
     dashpots: bool,
     /// The last step's contacts, as the last read brought them.
     contacts: std::sync::atomic::AtomicUsize,
+    /// The read-back's staging buffer, kept between reads.
+    staging: std::sync::Mutex<Option<wgpu::Buffer>>,
     /// The contact pass, when the scene has obstacles, or a ground with contact set.
     contact: Option<ContactPass>,
     /// Tearing's pass, when tearing is on.
@@ -328,6 +330,7 @@ impl GpuStep {
             dt: settings.dt,
             dashpots,
             contacts: Default::default(),
+            staging: Default::default(),
             contact,
             tear,
             xpbd,
@@ -638,12 +641,22 @@ impl GpuStep {
     /// waiting for the card.
     fn read(&self, ranges: &[(&wgpu::Buffer, u64, u64)]) -> Result<Vec<u8>, GpuError> {
         let total: u64 = ranges.iter().map(|r| r.2).sum();
-        let staging = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("read back"),
-            size: total.max(8).next_multiple_of(8),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        // One staging buffer, kept for the next read (the app reads every tick): a new one
+        // only when a read is larger than the last.
+        let mut kept = self
+            .staging
+            .lock()
+            .map_err(|e| GpuError::ReadBack(e.to_string()))?;
+        let size = total.max(8).next_multiple_of(8);
+        let staging = match kept.take() {
+            Some(b) if b.size() >= size => b,
+            _ => self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("read back"),
+                size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+        };
         let mut encoder = self
             .gpu
             .device
@@ -669,6 +682,7 @@ impl GpuStep {
             .map_err(|e| GpuError::ReadBack(e.to_string()))?;
         let bytes = slice.get_mapped_range()[..total as usize].to_vec();
         staging.unmap();
+        *kept = Some(staging);
         Ok(bytes)
     }
 
