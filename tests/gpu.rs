@@ -115,6 +115,13 @@ fn the_card_names_what_it_does_not_run() {
     let _ = GpuStep::unsupported;
 }
 
+/// Every obstacle's pose (centre, angle), as its entity holds it.
+fn poses(app: &mut bevy::app::App) -> Vec<(bevy::math::DVec2, f64)> {
+    let world = app.world_mut();
+    let mut q = world.query::<&hooke::sim::ObstaclePose>();
+    q.iter(world).map(|p| (p.center, p.angle)).collect()
+}
+
 /// Particle by particle, the card's state against the CPU's after the same steps: the largest
 /// position difference, m.
 fn difference(cpu: &bevy::app::App, card: &bevy::app::App) -> f64 {
@@ -250,14 +257,7 @@ fn obstacles_on_the_card_match_the_cpu() {
     step(&mut a, 100);
     let mut b = swept_grid(Integrator::SymplecticEuler);
     sim::gpu::advance_on_gpu(b.world_mut(), &gpu, Precision::F32, 100).unwrap();
-    let pose = |app: &mut bevy::app::App| {
-        let world = app.world_mut();
-        let mut q = world.query::<&hooke::sim::ObstaclePose>();
-        q.iter(world)
-            .map(|p| (p.center, p.angle))
-            .collect::<Vec<_>>()
-    };
-    assert_eq!(pose(&mut a), pose(&mut b));
+    assert_eq!(poses(&mut a), poses(&mut b));
 }
 
 /// Dashpots on the card: the shipped soft box with a dashpot of 2 N·s/m on every spring, 0.5 s,
@@ -319,13 +319,6 @@ fn switching_to_the_card_and_back_loses_nothing() {
     let clock = |app: &bevy::app::App| *app.world().resource::<SimClock>();
     assert_eq!(clock(&straight).steps, clock(&switched).steps);
     assert!((clock(&straight).time - clock(&switched).time).abs() < 1e-12);
-    let poses = |app: &mut bevy::app::App| {
-        let world = app.world_mut();
-        let mut q = world.query::<&hooke::sim::ObstaclePose>();
-        q.iter(world)
-            .map(|p| (p.center, p.angle))
-            .collect::<Vec<_>>()
-    };
     assert_eq!(poses(&mut straight), poses(&mut switched));
 }
 

@@ -5,7 +5,7 @@
 use super::perf;
 use crate::scene::LoadedScene;
 use crate::sim::{self, Integrator, SimParams, Solver};
-use crate::solver::gpu::{ExplicitMethod, ExplicitSettings, Gpu, GpuError, GpuStep};
+use crate::solver::gpu::{Gpu, GpuError, GpuStep};
 use std::time::Instant;
 
 /// The cloths measured by default: 0.26 M, 4.2 M and 16.8 M springs (the sizes).
@@ -83,15 +83,7 @@ pub fn run(
             note: None,
         });
         let params = world.resource::<SimParams>().clone();
-        let settings = ExplicitSettings {
-            method: ExplicitMethod::SymplecticEuler,
-            dt: params.dt,
-            gravity: params.gravity,
-            damping: params.damping,
-            ground: params.ground,
-            contact: None,
-            tear: None,
-        };
+        let settings = sim::gpu::settings(&params, steps);
         for precision in gpu.precisions() {
             let made = GpuStep::new(
                 gpu,

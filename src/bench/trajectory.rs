@@ -78,28 +78,9 @@ pub fn run_on_card(
     gpu: &crate::solver::gpu::Gpu,
     precision: crate::solver::gpu::Precision,
 ) -> Result<Trajectory, String> {
-    use crate::solver::gpu::GpuStep;
     let (mut app, steps, mut out) = start(scene, t_end, checkpoints)?;
     let world = app.world_mut();
-    world
-        .run_system_cached(sim::obstacles::gather_obstacles)
-        .map_err(|e| e.to_string())?;
-    if let Some(why) = sim::gpu::unsupported(world) {
-        return Err(why);
-    }
-    let params = world.resource::<sim::SimParams>().clone();
-    let settings = sim::gpu::settings(&params, steps);
-    let mut card = {
-        let obstacles = world.resource::<sim::Obstacles>().placed();
-        GpuStep::new(
-            gpu,
-            world.resource::<Solver>(),
-            &settings,
-            obstacles,
-            precision,
-        )
-        .map_err(|e| e.to_string())?
-    };
+    let mut card = sim::gpu::card_for(world, gpu, precision)?;
     let mut solver = world.resource_mut::<Solver>();
     for _ in 0..checkpoints {
         let start = Instant::now();

@@ -106,12 +106,8 @@ fn after_submit(
     let contacts = card.contacts();
     {
         let mut o = world.resource_mut::<Obstacles>();
-        for p in &mut o.placed {
-            if p.pose.velocity != bevy::math::DVec2::ZERO || p.pose.angular_velocity != 0.0 {
-                for _ in 0..n {
-                    p.advance(params.dt);
-                }
-            }
+        for _ in 0..n {
+            o.advance(params.dt);
         }
         o.contacts = crate::solver::Contacts {
             surfaces: contacts,
@@ -126,8 +122,7 @@ fn after_submit(
     let finite = !solver.non_finite;
     if world.contains_resource::<EnergyPeak>() {
         let energy = solver.energy(params.gravity).total();
-        let mut peak = world.resource_mut::<EnergyPeak>();
-        peak.max = Some(peak.max.map_or(energy, |m| m.max(energy)));
+        world.resource_mut::<EnergyPeak>().note(energy);
     }
     if !finite {
         *world.resource_mut::<SimStatus>() = SimStatus::BlewUp {
@@ -139,13 +134,29 @@ fn after_submit(
     Ok(finite)
 }
 
-/// The steps a fixed tick runs at the world's dt ([`super::advance`]'s rule).
-fn steps_per_tick(world: &World) -> u64 {
-    let dt = world.resource::<SimParams>().dt;
-    let target = world
+/// The world's packed state uploaded to `gpu` in `precision`, with the obstacles gathered as
+/// a tick gathers them; why not, when the card does not run the scene or refuses it.
+pub fn card_for(world: &mut World, gpu: &Gpu, precision: Precision) -> Result<GpuStep, String> {
+    world
+        .run_system_cached(super::obstacles::gather_obstacles)
+        .map_err(|e| e.to_string())?;
+    if let Some(why) = unsupported(world) {
+        return Err(why);
+    }
+    let params = world.resource::<SimParams>();
+    let per_tick = world
         .resource::<super::params::TickPlan>()
-        .target_tick_seconds;
-    ((target / dt).round() as u64).clamp(1, 10_000)
+        .steps_at(params.dt);
+    let obstacles = world.resource::<Obstacles>().placed();
+    let state = &world.resource::<Solver>().state;
+    GpuStep::new(
+        gpu,
+        state,
+        &settings(params, per_tick),
+        obstacles,
+        precision,
+    )
+    .map_err(|e| e.to_string())
 }
 
 /// Steps the world's packed state `steps` times on `gpu` in `precision`, in submits of up to
@@ -161,20 +172,7 @@ pub fn advance_on_gpu(
     steps: u64,
 ) -> Result<u64, String> {
     // The obstacles as the tick gathers them from their entities (and writes back after).
-    world
-        .run_system_cached(super::obstacles::gather_obstacles)
-        .map_err(|e| e.to_string())?;
-    if let Some(why) = unsupported(world) {
-        return Err(why);
-    }
-    let params = world.resource::<SimParams>().clone();
-    let mut card = {
-        let solver = world.resource::<Solver>();
-        let obstacles = world.resource::<Obstacles>().placed();
-        let settings = settings(&params, steps_per_tick(world));
-        GpuStep::new(gpu, &solver.state, &settings, obstacles, precision)
-            .map_err(|e| e.to_string())?
-    };
+    let mut card = card_for(world, gpu, precision)?;
     let mut taken = 0;
     let mut torn = vec![];
     while taken < steps {
@@ -262,6 +260,13 @@ impl CardStep {
         self.active
     }
 
+    /// Lets the card's copy of the state go: the next tick on the card uploads it afresh.
+    fn forget_copy(&mut self) {
+        self.active = false;
+        self.step = None;
+        self.made_for = None;
+    }
+
     /// The precision in use: the one asked for, else f32.
     fn precision(&self) -> Precision {
         self.precision.unwrap_or(Precision::F32)
@@ -285,10 +290,8 @@ pub fn decide_device(world: &mut World) {
     if !card.wanted {
         if card.active || card.why_not.is_some() || card.step.is_some() {
             let mut card = world.resource_mut::<CardStep>();
-            card.active = false;
+            card.forget_copy();
             card.why_not = None;
-            card.step = None;
-            card.made_for = None;
         }
         return;
     }
@@ -322,9 +325,7 @@ pub fn run_steps_on_card(world: &mut World) {
         // and the panel says why.
         tracing::warn!("hooke: {e}; stepping on the CPU");
         card.wanted = false;
-        card.active = false;
-        card.step = None;
-        card.made_for = None;
+        card.forget_copy();
         card.why_not = Some(e);
     }
     world.insert_resource(card);

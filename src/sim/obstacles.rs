@@ -73,6 +73,19 @@ impl Obstacles {
     pub fn entities(&self) -> &[Entity] {
         &self.entities
     }
+
+    /// Moves the moving obstacles by their velocities over `dt` (after each step's contact
+    /// pass, on the CPU or for the card's steps); returns whether any moved.
+    pub(crate) fn advance(&mut self, dt: f64) -> bool {
+        let mut moved = false;
+        for p in &mut self.placed {
+            if p.pose.velocity != DVec2::ZERO || p.pose.angular_velocity != 0.0 {
+                p.advance(dt);
+                moved = true;
+            }
+        }
+        moved
+    }
 }
 
 /// An obstacle's components as the step reads them.

@@ -285,6 +285,14 @@ pub struct TickPlan {
     pub target_tick_seconds: f64,
 }
 
+impl TickPlan {
+    /// The steps of a tick at `dt` when ticks are stepped back to back (headless runs,
+    /// [`crate::sim::advance`], and the card's tearing), the app's frame budget aside.
+    pub fn steps_at(&self, dt: f64) -> u64 {
+        ((self.target_tick_seconds / dt).round() as u64).clamp(1, 10_000)
+    }
+}
+
 impl Default for TickPlan {
     fn default() -> Self {
         TickPlan {

@@ -13,7 +13,6 @@ use super::tear;
 use crate::solver::step;
 use bevy::app::{FixedMain, RunFixedMainLoop, RunFixedMainLoopSystems};
 use bevy::ecs::schedule::{LogLevel, ScheduleBuildSettings, ScheduleLabel, SingleThreadedExecutor};
-use bevy::math::DVec2;
 use bevy::prelude::*;
 use bevy::time::Fixed;
 use std::time::{Duration, Instant};
@@ -623,14 +622,7 @@ fn collide(
     );
     let o = obstacles.bypass_change_detection();
     o.contacts = contacts;
-    let mut moved = false;
-    for p in &mut o.placed {
-        if p.pose.velocity != DVec2::ZERO || p.pose.angular_velocity != 0.0 {
-            p.advance(dt);
-            moved = true;
-        }
-    }
-    if moved {
+    if o.advance(dt) {
         obstacles.set_changed();
     }
     n.contact += 1;
@@ -730,11 +722,8 @@ fn mark_frame_end(mut budget: ResMut<StepBudget>) {
 /// benchmarks, tests. Returns the number of steps taken: fewer when paused or when a step blew up.
 pub fn advance(world: &mut World, steps: u64) -> u64 {
     let start = world.resource::<SimClock>().steps;
-    let (dt, target) = (
-        world.resource::<SimParams>().dt,
-        world.resource::<TickPlan>().target_tick_seconds,
-    );
-    let per_tick = ((target / dt).round() as u64).clamp(1, 10_000);
+    let dt = world.resource::<SimParams>().dt;
+    let per_tick = world.resource::<TickPlan>().steps_at(dt);
     let mut remaining = steps;
     while remaining > 0 {
         let n = remaining.min(per_tick);

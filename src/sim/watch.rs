@@ -55,6 +55,13 @@ pub struct EnergyPeak {
     pub seconds: f64,
 }
 
+impl EnergyPeak {
+    /// Takes the total energy `e` at the end of a step into the peak.
+    pub fn note(&mut self, e: f64) {
+        self.max = Some(self.max.map_or(e, |m| m.max(e)));
+    }
+}
+
 /// After every step, with [`EnergyPeak`] present: its total energy against the peak.
 pub(crate) fn track_energy_peak(
     solver: Res<Solver>,
@@ -63,7 +70,7 @@ pub(crate) fn track_energy_peak(
 ) {
     let clock = std::time::Instant::now();
     let e = solver.energy(params.gravity).total();
-    peak.max = Some(peak.max.map_or(e, |m| m.max(e)));
+    peak.note(e);
     peak.seconds += clock.elapsed().as_secs_f64();
 }
 

@@ -183,6 +183,31 @@ impl State {
         &mut self.drift
     }
 
+    /// Each particle's springs, by a counting sort of the packed springs: where each particle's
+    /// list starts (n + 1 values), and each entry's other end and spring, in spring order (a
+    /// spring's entry at its end a before its entry at b). VBD's blocks, the particle pairs'
+    /// exclusions and the card's gather all read this one listing.
+    pub(crate) fn spring_adjacency(&self) -> (Vec<u32>, Vec<(u32, u32)>) {
+        let n = self.x.len();
+        let mut starts = vec![0u32; n + 1];
+        for s in &self.springs {
+            starts[s.a as usize + 1] += 1;
+            starts[s.b as usize + 1] += 1;
+        }
+        for i in 0..n {
+            starts[i + 1] += starts[i];
+        }
+        let mut fill = starts.clone();
+        let mut entries = vec![(0, 0); starts[n] as usize];
+        for (k, s) in self.springs.iter().enumerate() {
+            for (from, to) in [(s.a, s.b), (s.b, s.a)] {
+                entries[fill[from as usize] as usize] = (to, k as u32);
+                fill[from as usize] += 1;
+            }
+        }
+        (starts, entries)
+    }
+
     /// Total mechanical energy: Σ ½m|v|² − Σ m g·x + Σ ½k(|xa−xb|−L)², and −nRT ln A for each
     /// gas body.
     pub fn energy(&self, gravity: DVec2) -> Energy {

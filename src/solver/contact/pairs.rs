@@ -67,23 +67,8 @@ fn spread(vectors: impl Iterator<Item = DVec2> + Clone) -> f64 {
 /// for `span = spans[i]` (a pair that two springs join is listed twice).
 pub(super) fn spring_neighbours(s: &State) -> (Vec<(u32, u32)>, Vec<u32>) {
     let n = s.x.len();
-    let mut degree = vec![0u32; n + 1];
-    for sp in &s.springs {
-        degree[sp.a as usize] += 1;
-        degree[sp.b as usize] += 1;
-    }
-    let mut start = vec![0u32; n + 1];
-    for i in 0..n {
-        start[i + 1] = start[i] + degree[i];
-    }
-    let mut fill = start.clone();
-    let mut adjacent = vec![0; start[n] as usize];
-    for sp in &s.springs {
-        for (i, j) in [(sp.a, sp.b), (sp.b, sp.a)] {
-            adjacent[fill[i as usize] as usize] = j;
-            fill[i as usize] += 1;
-        }
-    }
+    let (start, entries) = s.spring_adjacency();
+    let mut adjacent: Vec<u32> = entries.into_iter().map(|(other, _)| other).collect();
     let spans: Vec<(u32, u32)> = (0..n).map(|i| (start[i], start[i + 1])).collect();
     for &(a, b) in &spans {
         adjacent[a as usize..b as usize].sort_unstable();

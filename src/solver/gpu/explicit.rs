@@ -209,17 +209,7 @@ impl GpuStep {
         let pipeline = pipeline(device, &module, "step");
         let storage = wgpu::BufferUsages::STORAGE;
         let moving = storage | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
-        // A buffer is never empty (a scene without springs still binds its links): at least
-        // one vector of the widest precision.
-        let init = |label: &str, contents: &[u8], usage| {
-            let mut padded = contents.to_vec();
-            padded.resize(contents.len().max(16), 0);
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: &padded,
-                usage,
-            })
-        };
+        let init = |label: &str, contents: &[u8], usage| buffer(device, label, contents, usage);
         let x0 = init("x", &vectors(&state.x, precision), moving);
         let x1 = init("x'", &vectors(&state.x, precision), moving);
         let v0 = init("v", &vectors(&state.v, precision), moving);
@@ -373,15 +363,8 @@ impl GpuStep {
         let flags = u32::from(settings.method == ExplicitMethod::ExplicitEuler)
             | (u32::from(clamp) << 1)
             | (u32::from(external) << 2);
-        let mut bytes: Vec<u8> = [self.n, across, flags, 0]
-            .iter()
-            .flat_map(|v| v.to_le_bytes())
-            .collect();
-        let decay = if settings.damping != 0.0 {
-            (-settings.damping * settings.dt).exp()
-        } else {
-            1.0
-        };
+        // exp(−μ dt), exactly 1 at μ = 0.
+        let decay = crate::solver::forces::kernels::decay(settings.damping, settings.dt);
         let values = [
             settings.gravity.x,
             settings.gravity.y,
@@ -390,20 +373,26 @@ impl GpuStep {
             settings.ground.unwrap_or(0.0),
             0.0,
         ];
-        bytes.extend(reals(&values, self.precision));
-        bytes.resize(64, 0);
-        self.gpu.queue.write_buffer(&self.params, 0, &bytes);
+        let q = &self.gpu.queue;
+        write_settings(
+            q,
+            &self.params,
+            self.precision,
+            [self.n, across, flags, 0],
+            &values,
+        );
         if let Some(x) = &self.xpbd {
             let hs = settings.dt / f64::from(x.substeps());
             let floor = settings.ground.filter(|_| settings.contact.is_none());
             let flags = u32::from(floor.is_some())
                 | (u32::from(external) << 1)
                 | (u32::from(self.dashpots) << 2);
-            x.set(
-                &self.gpu.queue,
+            write_settings(
+                q,
+                &x.params,
                 self.precision,
                 [self.n, across, flags, 0],
-                [
+                &[
                     settings.gravity.x,
                     settings.gravity.y,
                     hs,
@@ -418,10 +407,7 @@ impl GpuStep {
         if let Some(c) = &self.contact {
             let contact = settings.contact.unwrap_or_default();
             let ground = settings.contact.and(settings.ground);
-            let mut bytes: Vec<u8> = [self.n, c.count as u32, u32::from(ground.is_some()), 0]
-                .iter()
-                .flat_map(|v| v.to_le_bytes())
-                .collect();
+            let header = [self.n, c.count as u32, u32::from(ground.is_some()), 0];
             let values = [
                 settings.dt,
                 contact.radius,
@@ -434,9 +420,7 @@ impl GpuStep {
                 0.0,
                 0.0,
             ];
-            bytes.extend(reals(&values, self.precision));
-            bytes.resize(96, 0);
-            self.gpu.queue.write_buffer(&c.params, 0, &bytes);
+            write_settings(q, &c.params, self.precision, header, &values);
         }
     }
 
@@ -446,13 +430,9 @@ impl GpuStep {
         let (Some(t), Some(strain)) = (&self.tear, settings.tear.map(|t| t.strain)) else {
             return;
         };
-        let mut bytes: Vec<u8> = [self.n, self.dispatch.0 * GROUP, 0, 0]
-            .iter()
-            .flat_map(|v| v.to_le_bytes())
-            .collect();
-        bytes.extend(reals(&[1.0 + strain, 0.0], self.precision));
-        bytes.resize(32, 0);
-        self.gpu.queue.write_buffer(&t.params, 0, &bytes);
+        let header = [self.n, self.dispatch.0 * GROUP, 0, 0];
+        let values = [1.0 + strain, 0.0];
+        write_settings(&self.gpu.queue, &t.params, self.precision, header, &values);
     }
 
     /// Writes the obstacles' shapes and poses to the card (as many as it was made with): the
@@ -885,6 +865,39 @@ pub(super) fn dispatch(
     pass.dispatch_workgroups(groups.0, groups.1, 1);
 }
 
+/// A storage or uniform buffer holding `contents`, never empty (a scene without springs still
+/// binds its links): at least one vector of the widest precision.
+pub(super) fn buffer(
+    device: &wgpu::Device,
+    label: &str,
+    contents: &[u8],
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    let mut padded = contents.to_vec();
+    padded.resize(contents.len().max(16), 0);
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: &padded,
+        usage,
+    })
+}
+
+/// Writes a kernel's settings as its WGSL `Params` lays them out: four `u32`s, then the numbers
+/// one after another in `precision` (each kernel orders its fields so that they pack so), the
+/// rest of the uniform buffer zeroed.
+pub(super) fn write_settings(
+    queue: &wgpu::Queue,
+    params: &wgpu::Buffer,
+    precision: Precision,
+    header: [u32; 4],
+    values: &[f64],
+) {
+    let mut bytes: Vec<u8> = header.iter().flat_map(|v| v.to_le_bytes()).collect();
+    bytes.extend(reals(values, precision));
+    bytes.resize(params.size() as usize, 0);
+    queue.write_buffer(params, 0, &bytes);
+}
+
 /// Bind group entries: each buffer whole at its binding.
 pub(super) fn entries<'a>(list: &[(u32, &'a wgpu::Buffer)]) -> Vec<wgpu::BindGroupEntry<'a>> {
     list.iter()
@@ -922,37 +935,24 @@ pub(super) fn shader(
 }
 
 /// Each particle's links: where each particle's list starts (n + 1 values), each link's other
-/// end, each link's (k, L, c, 0) (c its dashpot, 0 without), and each link's spring, from the
-/// packed springs by a counting sort.
+/// end, each link's (k, L, c, 0) (c its dashpot, 0 without), and each link's spring: the
+/// state's spring adjacency ([`State::spring_adjacency`]) with the springs' numbers.
 type Links = (Vec<u32>, Vec<u32>, Vec<[f64; 4]>, Vec<u32>);
 
 fn links(state: &State) -> Links {
-    let n = state.particle_count();
-    let mut starts = vec![0u32; n + 1];
-    for s in &state.springs {
-        starts[s.a as usize + 1] += 1;
-        starts[s.b as usize + 1] += 1;
-    }
-    for i in 0..n {
-        starts[i + 1] += starts[i];
-    }
-    let total = starts[n] as usize;
-    let mut fill = starts.clone();
-    let mut others = vec![0u32; total];
-    let mut records = vec![[0.0; 4]; total];
-    let mut spring = vec![0u32; total];
+    let (starts, entries) = state.spring_adjacency();
     let dashpot = state.materials.dashpot();
-    for (i, s) in state.springs.iter().enumerate() {
-        let c = dashpot.get(i).copied().unwrap_or(0.0);
-        for (from, to) in [(s.a, s.b), (s.b, s.a)] {
-            let at = fill[from as usize] as usize;
-            others[at] = to;
-            records[at] = [s.k, s.rest, c, 0.0];
-            spring[at] = i as u32;
-            fill[from as usize] += 1;
-        }
-    }
-    (starts, others, records, spring)
+    let records = entries
+        .iter()
+        .map(|&(_, k)| {
+            let s = &state.springs[k as usize];
+            let c = dashpot.get(k as usize).copied().unwrap_or(0.0);
+            [s.k, s.rest, c, 0.0]
+        })
+        .collect();
+    let others = entries.iter().map(|&(other, _)| other).collect();
+    let springs = entries.iter().map(|&(_, k)| k).collect();
+    (starts, others, records, springs)
 }
 
 pub(super) fn reals(values: &[f64], precision: Precision) -> Vec<u8> {

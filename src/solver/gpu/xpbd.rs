@@ -3,10 +3,9 @@
 //! the CPU's Gauss-Seidel sweeps in the CPU's order.
 
 use super::context::{Gpu, Precision};
-use super::explicit::{dispatch, entries, pipeline, reals, shader};
+use super::explicit::{buffer, dispatch, entries, pipeline, reals, shader};
 use crate::solver::methods::xpbd::coloured;
 use crate::solver::state::State;
-use wgpu::util::DeviceExt;
 
 const SOURCE: &str = include_str!("xpbd.wgsl");
 /// The uniform slots' stride: wgpu's least offset alignment for uniform bindings.
@@ -21,7 +20,8 @@ pub(super) struct XpbdPass {
     predict: (wgpu::ComputePipeline, [wgpu::BindGroup; 2]),
     project: (wgpu::ComputePipeline, Vec<wgpu::BindGroup>),
     finish: (wgpu::ComputePipeline, wgpu::BindGroup),
-    params: wgpu::Buffer,
+    /// The settings (`xpbd.wgsl`'s `Params`), written by the step's `set`.
+    pub(super) params: wgpu::Buffer,
     /// Constraints in each colour.
     colours: Vec<u32>,
     substeps: u32,
@@ -52,15 +52,7 @@ impl XpbdPass {
         let module = shader(device, SOURCE, "hooke xpbd", precision);
         let pipeline = |entry: &str| pipeline(device, &module, entry);
         let storage = wgpu::BufferUsages::STORAGE;
-        let init = |label: &str, contents: Vec<u8>, usage| {
-            let mut contents = contents;
-            contents.resize(contents.len().max(16), 0);
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: &contents,
-                usage,
-            })
-        };
+        let init = |label: &str, contents: Vec<u8>, usage| buffer(device, label, &contents, usage);
         let n = state.particle_count();
         let zeros = vec![0u8; n * 2 * precision.bytes()];
         let pos = init("xpbd positions", zeros.clone(), storage);
@@ -161,21 +153,6 @@ impl XpbdPass {
             substeps,
             sweeps,
         }
-    }
-
-    /// Writes the step's settings: the header (particles, the dispatch's row, flags) and the
-    /// numbers, as `xpbd.wgsl`'s `Params` lays them out.
-    pub(super) fn set(
-        &self,
-        queue: &wgpu::Queue,
-        precision: Precision,
-        header: [u32; 4],
-        values: [f64; 8],
-    ) {
-        let mut bytes: Vec<u8> = header.iter().flat_map(|v| v.to_le_bytes()).collect();
-        bytes.extend(reals(&values, precision));
-        bytes.resize(96, 0);
-        queue.write_buffer(&self.params, 0, &bytes);
     }
 
     /// The substeps per step and the substep's size for `dt`.

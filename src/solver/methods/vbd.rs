@@ -102,30 +102,20 @@ impl Vbd {
     fn colour(&mut self, s: &State) {
         let start = std::time::Instant::now();
         let n = s.x.len();
-        let mut degree = vec![0u32; n + 1];
-        for sp in &s.springs {
-            degree[sp.a as usize + 1] += 1;
-            degree[sp.b as usize + 1] += 1;
-        }
-        for i in 0..n {
-            degree[i + 1] += degree[i];
-        }
-        self.adjacency_start = degree.clone();
-        self.adjacency = vec![Edge::default(); s.springs.len() * 2];
-        let mut at = degree;
-        for (k, sp) in s.springs.iter().enumerate() {
-            let (a, b) = (sp.a as usize, sp.b as usize);
-            let edge = |other| Edge {
-                other,
-                spring: k as u32,
-                rest: sp.rest,
-                k: sp.k,
-            };
-            self.adjacency[at[a] as usize] = edge(sp.b);
-            at[a] += 1;
-            self.adjacency[at[b] as usize] = edge(sp.a);
-            at[b] += 1;
-        }
+        let (starts, entries) = s.spring_adjacency();
+        self.adjacency_start = starts;
+        self.adjacency = entries
+            .into_iter()
+            .map(|(other, k)| {
+                let sp = &s.springs[k as usize];
+                Edge {
+                    other,
+                    spring: k,
+                    rest: sp.rest,
+                    k: sp.k,
+                }
+            })
+            .collect();
         const NONE: u32 = u32::MAX;
         let mut colour_of = vec![NONE; n];
         let mut taken: Vec<bool> = vec![];
