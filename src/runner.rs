@@ -25,8 +25,8 @@ pub enum Device {
     #[default]
     Cpu,
     /// The graphics card (the `gpu` feature): symplectic and explicit Euler with obstacles, the
-    /// ground's contact, dashpots and tearing, and XPBD without contact; a scene that needs
-    /// more (contact between particles, pressure, muscles, plasticity) runs on the CPU and the
+    /// ground's contact, contact between particles, dashpots and tearing, and XPBD with the
+    /// same; a scene that needs more (contact by outlines, pressure, muscles, plasticity) runs on the CPU and the
     /// run says why.
     Gpu,
 }

@@ -161,7 +161,13 @@ pub struct FrameRow {
     pub steps: u64,
     /// The best of the runs' wall times, s (NaN when the cloth does not fit the card).
     pub wall_s: f64,
+    /// Particle pairs collide (at a radius of [`PAIR_RADIUS`] spacings).
+    pub pairs: bool,
 }
+
+/// The contact radius of the cloths with particle pairs on, in spacings: the self-colliding
+/// cloths' (the shipped folding strip's).
+pub const PAIR_RADIUS: f64 = 0.45;
 
 impl FrameRow {
     /// Milliseconds a step.
@@ -171,8 +177,9 @@ impl FrameRow {
 }
 
 /// The cloths of [`run`] (their top rows pinned) under XPBD at dt = 1/60 s with its default 10
-/// substeps and one sweep, on the CPU and on the card in f32: `budget` spring projections a
-/// figure (at least 2 steps), the best of `repeat` runs.
+/// substeps and one sweep, without contact and with particle pairs colliding, on the CPU and on
+/// the card in f32: `budget` spring projections a figure (at least 2 steps), the best of
+/// `repeat` runs.
 pub fn run_frames(
     gpu: &Gpu,
     widths: &[usize],
@@ -181,8 +188,13 @@ pub fn run_frames(
     mut progress: impl FnMut(&str),
 ) -> Result<Vec<FrameRow>, String> {
     let mut rows = vec![];
-    for &w in widths {
-        progress(&format!("cloth{w}: XPBD at 1/60 s, loading"));
+    for (&w, pairs) in widths.iter().flat_map(|w| [(w, false), (w, true)]) {
+        let what = if pairs {
+            "with pairs"
+        } else {
+            "without contact"
+        };
+        progress(&format!("cloth{w}: XPBD at 1/60 s {what}, loading"));
         let loaded = LoadedScene::from_scene(perf::cloth(w), None).map_err(|e| e.to_string())?;
         let mut app = crate::running_app(&loaded)?;
         let world = app.world_mut();
@@ -190,6 +202,14 @@ pub fn run_frames(
             let mut p = world.resource_mut::<SimParams>();
             p.integrator = Integrator::Xpbd;
             p.dt = 1.0 / 60.0;
+            if pairs {
+                p.contact = Some(crate::solver::ContactSettings {
+                    radius: PAIR_RADIUS / (w.max(2) - 1) as f64,
+                    friction: 0.3,
+                    particles: true,
+                    ..Default::default()
+                });
+            }
         }
         let params = world.resource::<SimParams>().clone();
         let springs = world.resource::<Solver>().spring_count();
@@ -211,6 +231,7 @@ pub fn run_frames(
             precision: "f64",
             steps,
             wall_s: best,
+            pairs,
         });
         let settings = sim::gpu::settings(&params, steps);
         let made = GpuStep::new(
@@ -244,6 +265,7 @@ pub fn run_frames(
             precision: "f32",
             steps,
             wall_s: best,
+            pairs,
         });
     }
     Ok(rows)
@@ -253,15 +275,19 @@ pub fn run_frames(
 pub fn frames_markdown(rows: &[FrameRow]) -> String {
     let mut s = String::from(
         "\n## XPBD at a frame's step\n\nThe same cloths under XPBD at dt = 1/60 s (10 substeps, one \
-         sweep each, 8 colours), without contact: a step's time on the CPU (f64, all threads) and \
-         on the card (f32, all steps in one submit). Real time needs a step under 16.7 ms.\n\n\
-         | cloth | springs | device | precision | steps | ms a step | real-time factor |\n\
-         |---|---:|---|---|---:|---:|---:|\n",
+         sweep each, 8 colours), hanging from one corner, without contact and with particle pairs \
+         colliding (radius 0.45 spacings, friction 0.3: the grid rebuilt and the pairs pushed \
+         apart after every substep, then the iterations and the velocity pass after the step): a \
+         step's time on the CPU (f64, all threads) and on the card (f32, all steps in one \
+         submit). Real time needs a step under 16.7 ms.\n\n\
+         | cloth | springs | contact | device | precision | steps | ms a step | real-time factor |\n\
+         |---|---:|---|---|---|---:|---:|---:|\n",
     );
     for r in rows {
+        let contact = if r.pairs { "pairs" } else { "none" };
         if r.wall_s.is_nan() {
             s += &format!(
-                "| {w}² | {:.2} M | {} | {} | – | does not fit | – |\n",
+                "| {w}² | {:.2} M | {contact} | {} | {} | – | does not fit | – |\n",
                 r.springs as f64 / 1e6,
                 r.device,
                 r.precision,
@@ -270,7 +296,7 @@ pub fn frames_markdown(rows: &[FrameRow]) -> String {
             continue;
         }
         s += &format!(
-            "| {w}² | {:.2} M | {} | {} | {} | {:.2} | {:.2}× |\n",
+            "| {w}² | {:.2} M | {contact} | {} | {} | {} | {:.2} | {:.2}× |\n",
             r.springs as f64 / 1e6,
             r.device,
             r.precision,

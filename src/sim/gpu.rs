@@ -2,8 +2,9 @@
 //! and stepping the world's packed state there ([`advance_on_gpu`]).
 //!
 //! The card runs symplectic and explicit Euler with gravity, external forces, damping, the
-//! ground, pins, dashpots, tearing, and the obstacles and the ground's contact with friction
-//! and restitution, and XPBD with the same but for contact ([`crate::solver::gpu`]). A scene that uses anything else stays on the CPU,
+//! ground, pins, dashpots, tearing, the obstacles and the ground's contact with friction and
+//! restitution, and contact between particles; and XPBD (to a fixed count of sweeps) with the
+//! same, its contact inside its substeps as on the CPU ([`crate::solver::gpu`]). A scene that uses anything else stays on the CPU,
 //! and [`unsupported`] says what keeps it there, in words a user reads.
 
 use super::obstacles::Obstacles;
@@ -34,17 +35,8 @@ pub fn unsupported(world: &World) -> Option<String> {
         )),
     };
     let mut what = vec![];
-    let touching = params.contact.is_some() || !world.resource::<Obstacles>().placed().is_empty();
-    if params.integrator == Integrator::Xpbd && touching {
-        what.push("contact under XPBD".to_string());
-    }
-    if let Some(c) = params.contact {
-        if c.particles && c.radius > 0.0 {
-            what.push("contact between particles".to_string());
-        }
-        if c.outlines && c.radius > 0.0 {
-            what.push("contact by outlines".to_string());
-        }
+    if params.contact.is_some_and(|c| c.outlines && c.radius > 0.0) {
+        what.push("contact by outlines".to_string());
     }
     if let Some(m) = GpuStep::unsupported(&world.resource::<Solver>().state) {
         what.push(m);
@@ -111,6 +103,7 @@ fn after_submit(
         }
         o.contacts = crate::solver::Contacts {
             surfaces: contacts,
+            pairs: card.pair_contacts(),
             ..Default::default()
         };
     }

@@ -87,7 +87,7 @@ pub const MAX_ITERATIONS: usize = 32;
 const RELAXATION: f64 = 1.5;
 
 /// The overlap, as a share of 2r, under which the position iterations stop.
-const TOLERANCE: f64 = 0.01;
+pub const TOLERANCE: f64 = 0.01;
 
 /// The particle-pair contact's lists and buffers, kept from step to step.
 #[derive(Debug, Default)]

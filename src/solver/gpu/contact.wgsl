@@ -21,9 +21,11 @@ const NONE: real = -1.0;
 struct Params {
     n: u32,
     obstacles: u32,
-    // Bit 0: the ground is this pass's (contact is set and the scene has a ground).
+    // Bit 0: the ground is this pass's (contact is set and the scene has a ground). Bit 1:
+    // the particles moved with their start-of-step velocity (explicit Euler).
     flags: u32,
-    pad: u32,
+    // The pair contact's hash slots, a power of two (pairs.wgsl).
+    table: u32,
     dt: real,
     radius: real,
     friction: real,
@@ -31,8 +33,9 @@ struct Params {
     // Below this approach speed an impact keeps nothing.
     rest_speed: real,
     ground: real,
-    spare0: real,
-    spare1: real,
+    // The pair contact's cell width, and the overlap under which its iterations stop.
+    reach: real,
+    tolerance: real,
 }
 
 // kind: 0 a circle (size: its radius), 1 a box (a: its half-extents), 2 a segment from a to b
@@ -52,13 +55,15 @@ struct Obstacle {
 }
 
 @group(0) @binding(0) var<uniform> p: Params;
-@group(0) @binding(1) var<storage, read> x_start: array<vec2<real>>;
+// The velocities the step began with: explicit Euler moved with them.
+@group(0) @binding(1) var<storage, read> v_start: array<vec2<real>>;
 @group(0) @binding(2) var<storage, read_write> x_end: array<vec2<real>>;
 @group(0) @binding(3) var<storage, read_write> v: array<vec2<real>>;
 @group(0) @binding(4) var<storage, read> inv_mass: array<real>;
 @group(0) @binding(5) var<storage, read_write> obstacles: array<Obstacle>;
-// [0]: contacts this step so far; [1]: the last step's.
-@group(0) @binding(6) var<storage, read_write> counter: array<atomic<u32>, 2>;
+// [0]: surface contacts this step so far; [1]: the last step's; [2]: the last step's touching
+// particle pairs.
+@group(0) @binding(6) var<storage, read_write> counter: array<atomic<u32>, 4>;
 
 fn is_circle(o: Obstacle) -> bool { return o.kind < 0.5; }
 fn is_box(o: Obstacle) -> bool { return o.kind > 0.5 && o.kind < 1.5; }
@@ -306,17 +311,19 @@ fn near(o: Obstacle, at: vec2<real>, r: real, travel: real) -> bool {
     return length(at - o.center) <= bound(o) + r + travel + real(2.0) * SLOP;
 }
 
-@compute @workgroup_size(256)
-fn collide(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = id.x + id.y * groups.x * 256u;
-    if (i >= p.n || inv_mass[i] == real(0.0)) {
-        return;
-    }
-    var x = x_end[i];
-    var vel = v[i];
-    let start = x_start[i];
-    var heading = vel;
-    if (any(x != start)) { heading = x - start; }
+// Where a particle that moved from `start` to `at` (heading `heading`) ends once put back out
+// of the obstacles and (when this pass has it) the ground by the radius, with friction's hold
+// on its slide, and with `vel` through each surface's `respond` when `respond_velocity`
+// (pass.rs: `place`, with the contact pass's or the solve's `touched`).
+struct Placed {
+    x: vec2<real>,
+    vel: vec2<real>,
+    contacts: u32,
+}
+
+fn place(at: vec2<real>, start: vec2<real>, heading: vec2<real>, v_in: vec2<real>, respond_velocity: bool) -> Placed {
+    var x = at;
+    var vel = v_in;
     let r = p.radius;
     let travel = length(x - start);
     var contacts = 0u;
@@ -341,7 +348,7 @@ fn collide(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
         x = hit + rest + n * into;
         let sv = velocity_at(o, x);
         x = hold(x, start, sv * p.dt, n, into);
-        vel = respond(vel, sv, n);
+        if (respond_velocity) { vel = respond(vel, sv, n); }
         contacts++;
     }
     for (var k = 0u; k < p.obstacles; k++) {
@@ -352,7 +359,7 @@ fn collide(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
             x += t.normal * t.depth;
             let sv = velocity_at(o, x);
             x = hold(x, start, sv * p.dt, t.normal, t.depth);
-            vel = respond(vel, sv, t.normal);
+            if (respond_velocity) { vel = respond(vel, sv, t.normal); }
             contacts++;
         }
     }
@@ -361,10 +368,92 @@ fn collide(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
         x.y = max(x.y, p.ground + r);
         let up = vec2<real>(0.0, 1.0);
         x = hold(x, start, vec2<real>(0.0, 0.0), up, depth);
-        vel = respond(vel, vec2<real>(0.0, 0.0), up);
+        if (respond_velocity) { vel = respond(vel, vec2<real>(0.0, 0.0), up); }
         contacts++;
     }
-    x_end[i] = x;
+    return Placed(x, vel, contacts);
+}
+
+@compute @workgroup_size(256)
+fn collide(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = id.x + id.y * groups.x * 256u;
+    if (i >= p.n || inv_mass[i] == real(0.0)) {
+        return;
+    }
+    let x = x_end[i];
+    let vel = v[i];
+    // Where the step began: back along the velocity the particle moved with (the pair contact
+    // may have moved it since, and the path starts that much farther along).
+    var moved_with = vel;
+    if ((p.flags & 2u) != 0u) { moved_with = v_start[i]; }
+    let start = x - moved_with * p.dt;
+    var heading = vel;
+    if (any(x != start)) { heading = x - start; }
+    let placed = place(x, start, heading, vel, true);
+    x_end[i] = placed.x;
+    v[i] = placed.vel;
+    if (placed.contacts > 0u) {
+        atomicAdd(&counter[0], placed.contacts);
+    }
+}
+
+// Contact inside XPBD's substeps (src/solver/contact/inside.rs, `InSolve::keep_out`): the
+// iterate of each free particle put back out of the surfaces along its path from where the
+// substep began (`enter`, before the first prediction: from where it is), with friction's
+// hold, and the heading it had before contact telling a thin segment's side.
+@group(0) @binding(23) var<storage, read_write> iterate: array<vec2<real>>;
+@group(0) @binding(24) var<storage, read> substep_start: array<vec2<real>>;
+@group(0) @binding(25) var<storage, read> heading_before: array<vec2<real>>;
+
+@compute @workgroup_size(256)
+fn enter(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = id.x + id.y * groups.x * 256u;
+    if (i >= p.n || inv_mass[i] == real(0.0)) { return; }
+    let at = iterate[i];
+    iterate[i] = place(at, at, heading_before[i], vec2<real>(0.0, 0.0), false).x;
+}
+
+@compute @workgroup_size(256)
+fn hold_out(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = id.x + id.y * groups.x * 256u;
+    if (i >= p.n || inv_mass[i] == real(0.0)) { return; }
+    iterate[i] = place(iterate[i], substep_start[i], heading_before[i], vec2<real>(0.0, 0.0), false).x;
+}
+
+// The velocity pass after a solve that kept contact itself (pass.rs: `settle`): a free particle
+// touching a surface keeps no approach in its end velocity, and bounces with the restitution's
+// share of the approach it had before contact, above the rest speed.
+@compute @workgroup_size(256)
+fn settle(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = id.x + id.y * groups.x * 256u;
+    if (i >= p.n || inv_mass[i] == real(0.0)) { return; }
+    let x = x_end[i];
+    let pre = heading_before[i];
+    var vel = v[i];
+    let r = p.radius;
+    var contacts = 0u;
+    for (var k = 0u; k < p.obstacles + 1u; k++) {
+        var n = vec2<real>(0.0, 1.0);
+        var sv = vec2<real>(0.0, 0.0);
+        if (k < p.obstacles) {
+            let o = obstacles[k];
+            if (length(x - o.center) > bound(o) + r + real(2.0) * SLOP) { continue; }
+            let dn = distance_to(o, x);
+            if (dn.d >= r + SLOP) { continue; }
+            n = dn.n;
+            sv = velocity_at(o, x);
+        } else if ((p.flags & 1u) == 0u || x.y >= p.ground + r + SLOP) {
+            continue;
+        }
+        let end = dot(vel - sv, n);
+        let before = dot(pre - sv, n);
+        var bounce = real(0.0);
+        if (-before > p.rest_speed) { bounce = -before * p.restitution; }
+        var normal = max(end, real(0.0));
+        if (before < real(0.0)) { normal = bounce; }
+        vel += n * (normal - end);
+        contacts++;
+    }
     v[i] = vel;
     if (contacts > 0u) {
         atomicAdd(&counter[0], contacts);
@@ -377,7 +466,11 @@ fn collide(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
 fn advance(@builtin(global_invocation_id) id: vec3<u32>) {
     let k = id.x;
     if (k == 0u) {
+        // With the pairs touching (each pair once): the first iteration's, or the velocity
+        // pass's, whichever saw more.
+        let pairs = max(atomicLoad(&control[FIRST]), atomicLoad(&control[TOUCHING])) / 2u;
         atomicStore(&counter[1], atomicLoad(&counter[0]));
+        atomicStore(&counter[2], pairs);
         atomicStore(&counter[0], 0u);
     }
     if (k < p.obstacles) {

@@ -10,6 +10,7 @@
 use super::context::{Gpu, GpuError, Precision, ready};
 use crate::solver::contact::ContactSettings;
 use crate::solver::contact::obstacle::{MIN_THICKNESS, Placed, SLOP, Shape};
+use crate::solver::contact::pairs::Pairs;
 use crate::solver::state::State;
 use glam::DVec2;
 use wgpu::util::DeviceExt;
@@ -18,10 +19,14 @@ use wgpu::util::DeviceExt;
 const SOURCE: &str = include_str!("explicit.wgsl");
 /// The contact pass's kernels (`collide`, and `advance` for the obstacles), in f32.
 const CONTACT: &str = include_str!("contact.wgsl");
+/// The pair contact's kernels, appended to the contact pass's (whose functions they use).
+const PAIRS: &str = include_str!("pairs.wgsl");
 /// Tearing's kernel, in f32.
 const TEAR: &str = include_str!("tear.wgsl");
 /// Threads in a work group (the kernel's `@workgroup_size`).
 const GROUP: u32 = 256;
+/// The overlap, as a share of 2r, under which the pair iterations stop (the CPU's).
+const PAIR_TOLERANCE: f64 = crate::solver::contact::pairs::TOLERANCE;
 /// Numbers in one obstacle's record (`Obstacle` in `contact.wgsl`).
 const OBSTACLE_REALS: usize = 16;
 /// The most work groups along one side of a dispatch.
@@ -99,8 +104,9 @@ pub struct GpuStep {
     dt: f64,
     /// Some spring has a dashpot.
     dashpots: bool,
-    /// The last step's contacts, as the last read brought them.
-    contacts: std::sync::atomic::AtomicUsize,
+    /// The last step's contacts with surfaces and between particles, as the last read brought
+    /// them.
+    contacts: [std::sync::atomic::AtomicUsize; 2],
     /// The read-back's staging buffer, kept between reads.
     staging: std::sync::Mutex<Option<wgpu::Buffer>>,
     /// The contact pass, when the scene has obstacles, or a ground with contact set.
@@ -129,16 +135,32 @@ struct TearPass {
 
 /// The contact pass's pipelines and buffers.
 #[derive(Debug)]
-struct ContactPass {
+pub(super) struct ContactPass {
     collide: wgpu::ComputePipeline,
     advance: wgpu::ComputePipeline,
     params: wgpu::Buffer,
     obstacles: wgpu::Buffer,
     count: usize,
     counter: wgpu::Buffer,
-    /// Bind group `g` reads the start of the step from `x[g]` and places `x[1 - g]`.
+    /// Bind group `g` follows the step that read `x[g]`, `v[g]`: it places `x[1 - g]`.
     groups: [wgpu::BindGroup; 2],
     advance_group: wgpu::BindGroup,
+    /// The contact between particles, when on.
+    pairs: Option<super::pairs::PairPass>,
+    /// Whether the ground is this pass's (contact is set and the scene has one): with no
+    /// obstacles either, only the pairs' passes run.
+    ground: bool,
+    /// Under XPBD, the contact inside its substeps.
+    inside: Option<InSolvePass>,
+}
+
+/// The contact inside XPBD's substeps (`contact.wgsl`'s `enter`, `hold_out` and `settle`).
+#[derive(Debug)]
+struct InSolvePass {
+    enter: (wgpu::ComputePipeline, wgpu::BindGroup),
+    hold_out: (wgpu::ComputePipeline, wgpu::BindGroup),
+    settle: (wgpu::ComputePipeline, wgpu::BindGroup),
+    particles: (u32, u32),
 }
 
 impl GpuStep {
@@ -262,10 +284,38 @@ impl GpuStep {
             })
         };
         let groups = [bind(0), bind(1)];
-        let needs_contact =
-            !obstacles.is_empty() || (settings.contact.is_some() && settings.ground.is_some());
-        let contact = needs_contact
-            .then(|| ContactPass::new(gpu, precision, obstacles.len(), [&x0, &x1], [&v0, &v1], &w));
+        let pairs = settings
+            .contact
+            .is_some_and(|c| c.particles && c.radius > 0.0)
+            && n >= 2;
+        let xpbd = match settings.method {
+            ExplicitMethod::Xpbd { substeps, sweeps } => Some(super::xpbd::XpbdPass::new(
+                gpu,
+                precision,
+                state,
+                (settings.dt, substeps, sweeps),
+                super::xpbd::StateBuffers {
+                    x: &x0,
+                    v: &v0,
+                    w: &w,
+                    external: &external,
+                },
+            )),
+            _ => None,
+        };
+        let needs_contact = !obstacles.is_empty()
+            || (settings.contact.is_some() && settings.ground.is_some())
+            || pairs;
+        let contact = needs_contact.then(|| {
+            let state = ContactBuffers {
+                x: [&x0, &x1],
+                v: [&v0, &v1],
+                w: &w,
+                links: &links,
+                xpbd: xpbd.as_ref(),
+            };
+            ContactPass::new(gpu, precision, obstacles.len(), state, pairs.then_some(n))
+        });
         let tear = settings.tear.map(|t| {
             let source = if dashpots {
                 TEAR.replace("alias Link = vec2<real>;", "alias Link = vec4<real>;")
@@ -283,21 +333,6 @@ impl GpuStep {
                 t,
             )
         });
-        let xpbd = match settings.method {
-            ExplicitMethod::Xpbd { substeps, sweeps } => Some(super::xpbd::XpbdPass::new(
-                gpu,
-                precision,
-                state,
-                (settings.dt, substeps, sweeps),
-                super::xpbd::StateBuffers {
-                    x: &x0,
-                    v: &v0,
-                    w: &w,
-                    external: &external,
-                },
-            )),
-            _ => None,
-        };
         let mut step = GpuStep {
             gpu: gpu.clone(),
             precision,
@@ -404,10 +439,15 @@ impl GpuStep {
                 ],
             );
         }
-        if let Some(c) = &self.contact {
+        if let Some(c) = &mut self.contact {
             let contact = settings.contact.unwrap_or_default();
             let ground = settings.contact.and(settings.ground);
-            let header = [self.n, c.count as u32, u32::from(ground.is_some()), 0];
+            c.ground = ground.is_some();
+            let flags = u32::from(ground.is_some())
+                | (u32::from(settings.method == ExplicitMethod::ExplicitEuler) << 1);
+            let table = c.pairs.as_ref().map_or(0, |p| p.table);
+            let header = [self.n, c.count as u32, flags, table];
+            let contact_distance = 2.0 * contact.radius;
             let values = [
                 settings.dt,
                 contact.radius,
@@ -417,8 +457,9 @@ impl GpuStep {
                 // rest (as `Surroundings::surface`).
                 2.0 * settings.gravity.length() * settings.dt,
                 ground.unwrap_or(0.0),
-                0.0,
-                0.0,
+                // The pair grid's cells: 2r and the CPU's skin.
+                contact_distance + Pairs::skin(contact.radius),
+                PAIR_TOLERANCE * contact_distance,
             ];
             write_settings(q, &c.params, self.precision, header, &values);
         }
@@ -478,10 +519,16 @@ impl GpuStep {
             .write_buffer(&c.obstacles, 0, &reals(&values, self.precision));
     }
 
-    /// Contacts resolved in the last step run (0 without a contact pass), as the last
-    /// [`Self::read_into`] read them with the state.
+    /// Contacts with surfaces resolved in the last step run (0 without a contact pass), as the
+    /// last [`Self::read_into`] read them with the state.
     pub fn contacts(&self) -> usize {
-        self.contacts.load(std::sync::atomic::Ordering::Relaxed)
+        self.contacts[0].load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    /// Pairs of particles touching in the last step run (each pair once), as the last
+    /// [`Self::read_into`] read them.
+    pub fn pair_contacts(&self) -> usize {
+        self.contacts[1].load(std::sync::atomic::Ordering::Relaxed)
     }
 
     /// Uploads `state`'s positions, velocities and external forces (the state this was made
@@ -505,7 +552,10 @@ impl GpuStep {
             for _ in 0..steps {
                 if let Some(x) = &self.xpbd {
                     // XPBD works in place on the state's buffers (`x[0]`, `v[0]`).
-                    x.record(pass, self.dispatch);
+                    x.record(pass, self.dispatch, self.contact.as_ref());
+                    if let Some(c) = &self.contact {
+                        c.record_after_solve(pass, self.dispatch);
+                    }
                 } else {
                     dispatch(
                         pass,
@@ -514,9 +564,7 @@ impl GpuStep {
                         self.dispatch,
                     );
                     if let Some(c) = &self.contact {
-                        dispatch(pass, &c.collide, &c.groups[self.current], self.dispatch);
-                        let obstacles = ((c.count as u32).div_ceil(64).max(1), 1);
-                        dispatch(pass, &c.advance, &c.advance_group, obstacles);
+                        c.record_after_step(pass, self.current, self.dispatch);
                     }
                     self.current = 1 - self.current;
                 }
@@ -593,13 +641,18 @@ impl GpuStep {
             (&self.v[self.current], 0, bytes),
         ];
         if let Some(c) = &self.contact {
-            ranges.push((&c.counter, 0, 8));
+            ranges.push((&c.counter, 0, 16));
         }
         let view = self.read(&ranges)?;
         let (state_bytes, counter) = view.split_at((2 * bytes) as usize);
-        if let [_, _, _, _, a, b, c, d] = *counter {
-            let n = u32::from_le_bytes([a, b, c, d]) as usize;
-            self.contacts.store(n, std::sync::atomic::Ordering::Relaxed);
+        let words: Vec<usize> = counter
+            .chunks_exact(4)
+            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]) as usize)
+            .collect();
+        if let [_, surfaces, pairs, _] = words[..] {
+            let relaxed = std::sync::atomic::Ordering::Relaxed;
+            self.contacts[0].store(surfaces, relaxed);
+            self.contacts[1].store(pairs, relaxed);
         }
         let values = from_bytes(state_bytes, self.precision);
         let n = self.n as usize;
@@ -742,17 +795,38 @@ impl TearPass {
     }
 }
 
+/// The state's buffers the contact pass reads and writes.
+struct ContactBuffers<'a> {
+    /// Positions and velocities, ping-ponged by the step.
+    x: [&'a wgpu::Buffer; 2],
+    v: [&'a wgpu::Buffer; 2],
+    w: &'a wgpu::Buffer,
+    /// The step's links: which pairs a spring joins.
+    links: &'a wgpu::Buffer,
+    /// XPBD's pass, whose substeps keep contact.
+    xpbd: Option<&'a super::xpbd::XpbdPass>,
+}
+
 impl ContactPass {
+    /// The pass for `count` obstacles, and with `pairs: Some(n)` the contact between the n
+    /// particles.
     fn new(
         gpu: &Gpu,
         precision: Precision,
         count: usize,
-        x: [&wgpu::Buffer; 2],
-        v: [&wgpu::Buffer; 2],
-        w: &wgpu::Buffer,
+        state: ContactBuffers,
+        pairs: Option<usize>,
     ) -> ContactPass {
+        let ContactBuffers {
+            x,
+            v,
+            w,
+            links,
+            xpbd,
+        } = state;
         let device = &gpu.device;
-        let module = shader(device, CONTACT, "hooke contact", precision);
+        let source = format!("{CONTACT}\n{PAIRS}");
+        let module = shader(device, &source, "hooke contact", precision);
         let (collide, advance) = (
             pipeline(device, &module, "collide"),
             pipeline(device, &module, "advance"),
@@ -771,13 +845,19 @@ impl ContactPass {
         });
         let counter = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("contacts"),
-            size: 8,
+            size: 16,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
+        let control = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("pair control"),
+            size: 4 * super::pairs::CONTROL_WORDS,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
         let layout = collide.get_bind_group_layout(0);
-        // After the step that read `x[from]`: the start positions, and the end positions and
-        // velocities it wrote.
+        // After the step that read `x[from]`, `v[from]`: the start velocities, and the end
+        // positions and velocities it wrote.
         let bind = |from: usize| {
             let to = 1 - from;
             device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -785,7 +865,7 @@ impl ContactPass {
                 layout: &layout,
                 entries: &entries(&[
                     (0, &params),
-                    (1, x[from]),
+                    (1, v[from]),
                     (2, x[to]),
                     (3, v[to]),
                     (4, w),
@@ -798,7 +878,75 @@ impl ContactPass {
         let advance_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("hooke obstacles"),
             layout: &advance.get_bind_group_layout(0),
-            entries: &entries(&[(0, &params), (5, &obstacles), (6, &counter)]),
+            entries: &entries(&[(0, &params), (5, &obstacles), (6, &counter), (19, &control)]),
+        });
+        let pairs = pairs.map(|n| {
+            // After the explicit step that read `x[0]`, the one that read `x[1]`; under XPBD,
+            // after the step and inside the substeps.
+            let targets = match xpbd {
+                Some(xp) => vec![(x[0], v[0]), (&xp.pos, v[0])],
+                None => vec![(x[1], v[1]), (x[0], v[0])],
+            };
+            let bound = super::pairs::Bound {
+                params: &params,
+                targets,
+                w,
+                obstacles: &obstacles,
+                links,
+                control: &control,
+            };
+            super::pairs::PairPass::new(gpu, &module, precision, n, bound)
+        });
+        let inside = xpbd.map(|xp| {
+            let bind = |entry: &str, list: &[(u32, &wgpu::Buffer)]| {
+                let pipeline = pipeline(device, &module, entry);
+                let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("hooke contact in the solve"),
+                    layout: &pipeline.get_bind_group_layout(0),
+                    entries: &entries(list),
+                });
+                (pipeline, group)
+            };
+            let o = &obstacles;
+            let n = (xp.pos.size() / (2 * precision.bytes() as u64)).max(1);
+            let groups = n.div_ceil(u64::from(GROUP)) as u32;
+            let across = groups.min(MAX_GROUPS);
+            InSolvePass {
+                enter: bind(
+                    "enter",
+                    &[
+                        (0, &params),
+                        (4, w),
+                        (5, o),
+                        (23, &xp.pos),
+                        (25, &xp.heading),
+                    ],
+                ),
+                hold_out: bind(
+                    "hold_out",
+                    &[
+                        (0, &params),
+                        (4, w),
+                        (5, o),
+                        (23, &xp.pos),
+                        (24, &xp.prev),
+                        (25, &xp.heading),
+                    ],
+                ),
+                settle: bind(
+                    "settle",
+                    &[
+                        (0, &params),
+                        (2, x[0]),
+                        (3, v[0]),
+                        (4, w),
+                        (5, o),
+                        (6, &counter),
+                        (25, &xp.heading),
+                    ],
+                ),
+                particles: (across, groups.div_ceil(across)),
+            }
         });
         ContactPass {
             collide,
@@ -809,6 +957,67 @@ impl ContactPass {
             counter,
             groups,
             advance_group,
+            pairs,
+            ground: false,
+            inside,
+        }
+    }
+
+    /// Whether the pass keeps particles out of surfaces (obstacles, or the ground).
+    fn has_surfaces(&self) -> bool {
+        self.count > 0 || self.ground
+    }
+
+    /// Records the contact after an explicit step that read `x[from]`: the pairs, then the
+    /// surfaces, then the obstacles' motion.
+    fn record_after_step(&self, pass: &mut wgpu::ComputePass, from: usize, particles: (u32, u32)) {
+        if let Some(pairs) = &self.pairs {
+            pairs.record(pass, from, false);
+        }
+        if self.has_surfaces() {
+            dispatch(pass, &self.collide, &self.groups[from], particles);
+        }
+        self.record_advance(pass);
+    }
+
+    /// Records the contact after XPBD's step, which kept contact inside its substeps: the
+    /// pairs (their push into the velocity), the surfaces' velocity pass, the obstacles' motion.
+    fn record_after_solve(&self, pass: &mut wgpu::ComputePass, particles: (u32, u32)) {
+        if let Some(pairs) = &self.pairs {
+            pairs.record(pass, 0, true);
+        }
+        if let Some(inside) = self.inside.as_ref().filter(|_| self.has_surfaces()) {
+            dispatch(pass, &inside.settle.0, &inside.settle.1, particles);
+        }
+        self.record_advance(pass);
+    }
+
+    fn record_advance(&self, pass: &mut wgpu::ComputePass) {
+        let obstacles = ((self.count as u32).div_ceil(64).max(1), 1);
+        dispatch(pass, &self.advance, &self.advance_group, obstacles);
+    }
+
+    /// Records the iterate held out of the surfaces before XPBD's first prediction.
+    pub(super) fn record_entry(&self, pass: &mut wgpu::ComputePass) {
+        if let Some(inside) = self.inside.as_ref().filter(|_| self.has_surfaces()) {
+            dispatch(pass, &inside.enter.0, &inside.enter.1, inside.particles);
+        }
+    }
+
+    /// Records the contact after one of XPBD's substeps: pairs pushed apart, then the iterate
+    /// held out of the surfaces along its path from the substep's start.
+    pub(super) fn record_substep_end(&self, pass: &mut wgpu::ComputePass) {
+        let Some(inside) = &self.inside else { return };
+        if let Some(pairs) = &self.pairs {
+            pairs.record_pushes(pass, 1);
+        }
+        if self.has_surfaces() {
+            dispatch(
+                pass,
+                &inside.hold_out.0,
+                &inside.hold_out.1,
+                inside.particles,
+            );
         }
     }
 }

@@ -4,19 +4,21 @@
 //! What runs here today: symplectic and explicit Euler with gravity, external forces,
 //! damping, the ground, pins and dashpots (`explicit.wgsl`), the contact pass against
 //! obstacles and the ground with the particles' radius, friction and restitution
-//! (`contact.wgsl`), tearing at the end of each of the CPU's ticks (`tear.wgsl`), and XPBD in
-//! the CPU's colours and order (`xpbd.wgsl`, without contact), all in [`GpuStep`]; in f32, and
-//! in f64 where the adapter has `SHADER_F64`. The state stays on the card between steps and
-//! comes back only when asked ([`GpuStep::read_into`]). What does not run here (the other
-//! methods, XPBD's contact, contact between particles and by outlines, pressure bodies,
-//! muscles, plasticity) stays on the CPU,
-//! and the callers say so ([`GpuStep::unsupported`], [`crate::sim::gpu`]).
+//! (`contact.wgsl`), contact between particles through a hash grid rebuilt every step
+//! (`pairs.wgsl`), tearing at the end of each of the CPU's ticks (`tear.wgsl`), and XPBD in the
+//! CPU's colours and order with the same contact inside its substeps (`xpbd.wgsl`), all in
+//! [`GpuStep`]; in f32, and in f64 where the adapter has `SHADER_F64`. The state stays on the
+//! card between steps and comes back only when asked ([`GpuStep::read_into`]). What does not
+//! run here (the other methods, XPBD to a tolerance, contact by outlines, pressure bodies,
+//! muscles, plasticity) stays on the CPU, and the callers say so ([`GpuStep::unsupported`],
+//! [`crate::sim::gpu`]).
 //!
 //! The kernels take a [`Gpu`], a wgpu device and queue: the CLI and the tests open their own,
 //! an app hands over its renderer's. Nothing here names an engine type.
 
 mod context;
 mod explicit;
+mod pairs;
 mod xpbd;
 
 pub use context::{Gpu, GpuError, Precision};

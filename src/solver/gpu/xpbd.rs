@@ -1,9 +1,11 @@
 //! XPBD on the card ([`xpbd.wgsl`]): the CPU's colouring and coefficients
 //! ([`crate::solver::methods::xpbd`]), one dispatch a colour a sweep, so that the sweeps are
-//! the CPU's Gauss-Seidel sweeps in the CPU's order.
+//! the CPU's Gauss-Seidel sweeps in the CPU's order; with contact, the CPU's contact inside
+//! the substeps (`contact/inside.rs`): the iterate held out of the surfaces before the first
+//! prediction and after each substep's sweeps, and particle pairs pushed apart there.
 
 use super::context::{Gpu, Precision};
-use super::explicit::{buffer, dispatch, entries, pipeline, reals, shader};
+use super::explicit::{ContactPass, buffer, dispatch, entries, pipeline, reals, shader};
 use crate::solver::methods::xpbd::coloured;
 use crate::solver::state::State;
 
@@ -22,6 +24,11 @@ pub(super) struct XpbdPass {
     finish: (wgpu::ComputePipeline, wgpu::BindGroup),
     /// The settings (`xpbd.wgsl`'s `Params`), written by the step's `set`.
     pub(super) params: wgpu::Buffer,
+    /// The iterate, each substep's start, and each particle's heading before contact: what
+    /// the contact inside the substeps reads and writes.
+    pub(super) pos: wgpu::Buffer,
+    pub(super) prev: wgpu::Buffer,
+    pub(super) heading: wgpu::Buffer,
     /// Constraints in each colour.
     colours: Vec<u32>,
     substeps: u32,
@@ -56,7 +63,8 @@ impl XpbdPass {
         let n = state.particle_count();
         let zeros = vec![0u8; n * 2 * precision.bytes()];
         let pos = init("xpbd positions", zeros.clone(), storage);
-        let prev = init("xpbd substep starts", zeros, storage);
+        let prev = init("xpbd substep starts", zeros.clone(), storage);
+        let heading = init("xpbd headings", zeros, storage);
         let ends: Vec<u8> = c
             .ends
             .iter()
@@ -118,7 +126,16 @@ impl XpbdPass {
         };
         let StateBuffers { x, v, w, external } = buffers;
         let begin = pipeline("begin");
-        let begin_group = group(&begin, &[(0, &params), (2, &pos), (5, x)], None);
+        let beginning = [
+            (0, &params),
+            (2, &pos),
+            (4, v),
+            (5, x),
+            (6, w),
+            (7, external),
+            (10, &heading),
+        ];
+        let begin_group = group(&begin, &beginning, None);
         let predict = pipeline("predict");
         let predicting = [
             (0, &params),
@@ -149,6 +166,9 @@ impl XpbdPass {
             project: (project, project_groups),
             finish: (finish, finish_group),
             params,
+            pos,
+            prev,
+            heading,
             colours,
             substeps,
             sweeps,
@@ -160,11 +180,19 @@ impl XpbdPass {
         self.substeps
     }
 
-    /// Records one step.
-    pub(super) fn record(&self, pass: &mut wgpu::ComputePass, particles: (u32, u32)) {
+    /// Records one step, with `contact` inside the substeps when the scene has it.
+    pub(super) fn record(
+        &self,
+        pass: &mut wgpu::ComputePass,
+        particles: (u32, u32),
+        contact: Option<&ContactPass>,
+    ) {
         let run = dispatch;
         run(pass, &self.begin.0, &self.begin.1, particles);
         for substep in 0..self.substeps {
+            if let Some(c) = contact.filter(|_| substep == 0) {
+                c.record_entry(pass);
+            }
             let first = usize::from(substep != 0);
             run(pass, &self.predict.0, &self.predict.1[first], particles);
             for sweep in 0..self.sweeps {
@@ -173,6 +201,9 @@ impl XpbdPass {
                     let groups = size.div_ceil(GROUP).max(1);
                     run(pass, &self.project.0, group, (groups, 1));
                 }
+            }
+            if let Some(c) = contact {
+                c.record_substep_end(pass);
             }
         }
         run(pass, &self.finish.0, &self.finish.1, particles);

@@ -60,6 +60,9 @@ struct Coefficients {
 @group(0) @binding(7) var<storage, read> applied: array<vec2<real>>;
 @group(0) @binding(8) var<storage, read> ends: array<vec2<u32>>;
 @group(0) @binding(9) var<storage, read_write> coef: array<Coefficients>;
+// Each particle's velocity before contact: its start velocity and a step of its body forces'
+// acceleration (where it heads, which tells a thin segment's side; contact.wgsl reads it).
+@group(0) @binding(10) var<storage, read_write> heading: array<vec2<real>>;
 
 fn particle(id: vec3<u32>) -> u32 {
     return id.x + id.y * p.row;
@@ -73,12 +76,21 @@ fn on_ground(at: vec2<real>, w: real) -> vec2<real> {
     return r;
 }
 
-// The step's start: the work positions are the state's.
+// The step's start: the work positions are the state's, and the heading before contact.
 @compute @workgroup_size(256)
 fn begin(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = particle(id);
     if (i >= p.n) { return; }
     pos[i] = x[i];
+    let w = inv_mass[i];
+    var a = vec2<real>(0.0, 0.0);
+    if (w != real(0.0)) {
+        a = p.gravity;
+        if ((p.flags & 2u) != 0u) {
+            a += applied[i] * w;
+        }
+    }
+    heading[i] = v[i] + a * p.dt;
 }
 
 // v += hₛ f/m, p = x, x += hₛ v, with the ground as a position constraint; after the first
