@@ -670,15 +670,23 @@ fn run_on_the_gpu_reports_the_adapter_or_why_not() {
     assert_eq!(j["precision"], "f32");
     assert_eq!(j["steps_taken"], 100);
     assert!(j["energy_end"].as_f64().unwrap() < j["energy_start"].as_f64().unwrap());
-    // The pile has contact: on the CPU, saying so.
+    // The pile's particle pairs run on the card, and their contacts come back.
     let o = hooke(&[
-        "run", "--scene", "pile", "--steps", "10", "--device", "gpu", "--json",
+        "run", "--scene", "pile", "--steps", "3000", "--device", "gpu", "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j = json(&o);
+    assert_eq!(j["device"], "gpu");
+    assert!(j["pair_contacts"].as_u64().is_some_and(|n| n > 0), "{j}");
+    // The balloon's pressure bodies (and outlines) do not: on the CPU, saying so.
+    let o = hooke(&[
+        "run", "--scene", "balloon", "--steps", "10", "--device", "gpu", "--json",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(json(&o)["device"], "cpu");
     let e = stderr(&o);
     assert!(
-        e.contains("does not run contact") && e.contains("on the CPU"),
+        e.contains("does not run") && e.contains("pressure bodies") && e.contains("on the CPU"),
         "{e}"
     );
     assert_bad_input(

@@ -658,3 +658,49 @@ fn xpbd_contact_on_the_card_matches_the_cpu() {
         }
     }
 }
+
+/// A particle held and dragged (`Kinematic`, its `Position` moved between ticks, as the app's
+/// grab does) while the card steps: the card takes each new position, so the cloth follows the
+/// drag as on the CPU (in f64, to 1e-9 m).
+#[test]
+fn a_drag_reaches_the_card() {
+    let Some(gpu) = card() else { return };
+    if !gpu.has_f64() {
+        println!("skipped: {} has no f64", gpu.adapter());
+        return;
+    }
+    let drag = |app: &mut bevy::app::App| {
+        let world = app.world_mut();
+        let held = {
+            let mut q = world.query::<(bevy::prelude::Entity, &hooke::sim::SolverIndex)>();
+            q.iter(world)
+                .find(|(_, i)| i.0 == 9)
+                .map(|(e, _)| e)
+                .unwrap()
+        };
+        world.entity_mut(held).insert(hooke::sim::Kinematic);
+        for _ in 0..5 {
+            let mut p = world.get_mut::<hooke::sim::Position>(held).unwrap();
+            p.0.x += 0.02;
+            p.0.y += 0.01;
+            let taken = sim::advance(world, 200);
+            assert_eq!(taken, 200);
+        }
+    };
+    let mut cpu = swept_grid(Integrator::SymplecticEuler);
+    step(&mut cpu, 100);
+    drag(&mut cpu);
+    let mut app = swept_grid(Integrator::SymplecticEuler);
+    {
+        let mut card = app.world_mut().resource_mut::<sim::gpu::CardStep>();
+        card.use_card(gpu.clone());
+        card.precision = Some(Precision::F64);
+        card.wanted = true;
+    }
+    step(&mut app, 100);
+    assert!(app.world().resource::<sim::gpu::CardStep>().active());
+    drag(&mut app);
+    let d = difference(&cpu, &app);
+    println!("{d:e} m");
+    assert!(d < 1e-9, "a particle is {d} m off the CPU's drag");
+}

@@ -353,6 +353,9 @@ fn tick_on_card(world: &mut World, card: &mut CardStep, steps: u64) -> Result<()
             let state = &world.resource::<Solver>().state;
             if card.edits != edits || state.external_active() {
                 step.write_state(state);
+            } else {
+                // A held particle dragged (its moves are not edits: the step does not move it).
+                step.write_fixed(state);
             }
             step
         }

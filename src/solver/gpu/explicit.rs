@@ -119,6 +119,9 @@ pub struct GpuStep {
     since_tear: u32,
     /// Each link's spring, in the state's spring order.
     link_spring: Vec<u32>,
+    /// The particles the step does not move (inverse mass 0: pinned, or held by a drag), with
+    /// the position and velocity the card has for each.
+    fixed: Vec<(usize, DVec2, DVec2)>,
 }
 
 /// Tearing's pipeline and buffers.
@@ -361,6 +364,7 @@ impl GpuStep {
             xpbd,
             since_tear: 0,
             link_spring,
+            fixed: fixed(state),
         };
         step.set(settings, state.external_active);
         step.set_tear(settings);
@@ -539,6 +543,36 @@ impl GpuStep {
         q.write_buffer(&self.v[self.current], 0, &vectors(&state.v, self.precision));
         if state.external_active && self.external_len == state.external.len() {
             q.write_buffer(&self.external, 0, &vectors(&state.external, self.precision));
+        }
+        self.fixed = fixed(state);
+    }
+
+    /// Uploads the position and velocity of each particle the step does not move (pinned, or
+    /// held) that the CPU moved since the card last had it: a drag moves its held particle
+    /// every frame without touching the rest of the state.
+    pub fn write_fixed(&mut self, state: &State) {
+        let width = 2 * self.precision.bytes() as u64;
+        for (i, x, v) in &mut self.fixed {
+            let (now_x, now_v) = match (state.x.get(*i), state.v.get(*i)) {
+                (Some(x), Some(v)) => (*x, *v),
+                _ => continue,
+            };
+            if now_x == *x && now_v == *v {
+                continue;
+            }
+            (*x, *v) = (now_x, now_v);
+            let q = &self.gpu.queue;
+            let at = *i as u64 * width;
+            q.write_buffer(
+                &self.x[self.current],
+                at,
+                &vectors(&[now_x], self.precision),
+            );
+            q.write_buffer(
+                &self.v[self.current],
+                at,
+                &vectors(&[now_v], self.precision),
+            );
         }
     }
 
@@ -1020,6 +1054,15 @@ impl ContactPass {
             );
         }
     }
+}
+
+/// The particles of `state` the step does not move (inverse mass 0), with their positions and
+/// velocities.
+fn fixed(state: &State) -> Vec<(usize, DVec2, DVec2)> {
+    (state.inv_mass.iter().enumerate())
+        .filter(|(_, w)| **w == 0.0)
+        .map(|(i, _)| (i, state.x[i], state.v[i]))
+        .collect()
 }
 
 /// A segment's least thickness on the card: the CPU's in f64, 1e-5 m in f32 (see
