@@ -385,11 +385,20 @@ fn tearing_on_the_card_matches_the_cpu() {
 /// A scene the card does not run steps on the CPU with the reason named.
 #[test]
 fn the_tick_steps_on_the_card_when_switched_and_carries_the_state_over() {
+    for background in [false, true] {
+        the_tick_steps_on_the_card(background);
+    }
+}
+
+/// The test above, with the state read back each tick (`background`: in the background, the
+/// app's way, taken by the next tick and brought level by `catch_up` before each look).
+fn the_tick_steps_on_the_card(background: bool) {
     let Some(gpu) = card() else { return };
     if !gpu.has_f64() {
         println!("skipped: {} has no f64", gpu.adapter());
         return;
     }
+    let level = |app: &mut bevy::app::App| sim::gpu::catch_up(app.world_mut()).unwrap();
     let nudge = |app: &mut bevy::app::App| {
         let world = app.world_mut();
         let mut q = world.query::<(&hooke::sim::SolverIndex, &mut hooke::sim::Position)>();
@@ -412,11 +421,22 @@ fn the_tick_steps_on_the_card_when_switched_and_carries_the_state_over() {
         let mut card = app.world_mut().resource_mut::<sim::gpu::CardStep>();
         card.use_card(gpu.clone());
         card.precision = Some(Precision::F64);
+        card.background_reads = background;
     }
     switch(&mut app, true);
     step(&mut app, 1000);
     let card = app.world().resource::<sim::gpu::CardStep>();
     assert!(card.active(), "not on the card: {:?}", card.why_not);
+    if background {
+        // The solver is a tick behind the card until it catches up.
+        let behind = solver(&app).x().to_vec();
+        level(&mut app);
+        assert_ne!(
+            solver(&app).x(),
+            &behind[..],
+            "the last tick's state came back at once"
+        );
+    }
     nudge(&mut app);
     step(&mut app, 1000);
     switch(&mut app, false);
@@ -424,6 +444,7 @@ fn the_tick_steps_on_the_card_when_switched_and_carries_the_state_over() {
     assert!(!app.world().resource::<sim::gpu::CardStep>().active());
     switch(&mut app, true);
     step(&mut app, 500);
+    level(&mut app);
     let d = difference(&cpu, &app);
     println!("{d:e} m");
     assert!(d < 1e-9, "a particle is {d} m off the CPU's run");
@@ -661,9 +682,16 @@ fn xpbd_contact_on_the_card_matches_the_cpu() {
 
 /// A particle held and dragged (`Kinematic`, its `Position` moved between ticks, as the app's
 /// grab does) while the card steps: the card takes each new position, so the cloth follows the
-/// drag as on the CPU (in f64, to 1e-9 m).
+/// drag as on the CPU (in f64, to 1e-9 m); with the state read back each tick and in the
+/// background.
 #[test]
 fn a_drag_reaches_the_card() {
+    for background in [false, true] {
+        a_drag_on_the_card(background);
+    }
+}
+
+fn a_drag_on_the_card(background: bool) {
     let Some(gpu) = card() else { return };
     if !gpu.has_f64() {
         println!("skipped: {} has no f64", gpu.adapter());
@@ -696,10 +724,12 @@ fn a_drag_reaches_the_card() {
         card.use_card(gpu.clone());
         card.precision = Some(Precision::F64);
         card.wanted = true;
+        card.background_reads = background;
     }
     step(&mut app, 100);
     assert!(app.world().resource::<sim::gpu::CardStep>().active());
     drag(&mut app);
+    sim::gpu::catch_up(app.world_mut()).unwrap();
     let d = difference(&cpu, &app);
     println!("{d:e} m");
     assert!(d < 1e-9, "a particle is {d} m off the CPU's drag");

@@ -74,43 +74,43 @@ pub fn settings(params: &SimParams, steps_per_tick: u64) -> ExplicitSettings {
     }
 }
 
-/// What follows a submit of `n` steps: the state read back into the solver (a spring the card
-/// broke carries nothing from here on: its index goes into `torn`, its entity at the end of the
-/// run), the obstacles moved on the CPU in f64 as the step moves them, the last step's
-/// contacts, the clock, the energy peak when one is kept, and a blow-up's status. Returns
-/// whether the state is finite.
-fn after_submit(
-    world: &mut World,
-    card: &GpuStep,
-    n: u64,
-    torn: &mut Vec<usize>,
-) -> Result<bool, String> {
+/// What follows a submit of `n` steps on the CPU's side: the obstacles moved in f64 as the
+/// step moves them, and the clock.
+fn after_run(world: &mut World, n: u64) {
+    let dt = world.resource::<SimParams>().dt;
+    {
+        let mut o = world.resource_mut::<Obstacles>();
+        for _ in 0..n {
+            o.advance(dt);
+        }
+    }
+    let mut clock = world.resource_mut::<SimClock>();
+    clock.steps += n;
+    clock.time += n as f64 * dt;
+}
+
+/// The state the card sends back, into the solver (a read [`GpuStep::begin_read`] started,
+/// waited for only if the card has not finished it; else one read now): the positions and
+/// velocities (a spring the card broke carries nothing from here on: its index goes into
+/// `torn`, its entity at the end of the run), the last step's contacts, the energy peak when
+/// one is kept, and a blow-up's status. Returns whether the state is finite.
+fn take_state(world: &mut World, card: &GpuStep, torn: &mut Vec<usize>) -> Result<bool, String> {
     let params = world.resource::<SimParams>().clone();
     {
         let mut solver = world.resource_mut::<Solver>();
-        card.read_into(&mut solver.state)
+        card.finish_read_into(&mut solver.state)
             .map_err(|e| e.to_string())?;
         for i in card.torn_springs().map_err(|e| e.to_string())? {
             solver.state.springs[i].k = 0.0;
             torn.push(i);
         }
     }
-    let contacts = card.contacts();
-    {
-        let mut o = world.resource_mut::<Obstacles>();
-        for _ in 0..n {
-            o.advance(params.dt);
-        }
-        o.contacts = crate::solver::Contacts {
-            surfaces: contacts,
-            pairs: card.pair_contacts(),
-            ..Default::default()
-        };
-    }
-    let mut clock = world.resource_mut::<SimClock>();
-    clock.steps += n;
-    clock.time += n as f64 * params.dt;
-    let clock = *clock;
+    world.resource_mut::<Obstacles>().contacts = crate::solver::Contacts {
+        surfaces: card.contacts(),
+        pairs: card.pair_contacts(),
+        ..Default::default()
+    };
+    let clock = *world.resource::<SimClock>();
     let solver = world.resource::<Solver>();
     let finite = !solver.non_finite;
     if world.contains_resource::<EnergyPeak>() {
@@ -177,7 +177,8 @@ pub fn advance_on_gpu(
             card.tear_now();
         }
         taken += n;
-        if !after_submit(world, &card, n, &mut torn)? {
+        after_run(world, n);
+        if !take_state(world, &card, &mut torn)? {
             break;
         }
     }
@@ -224,6 +225,11 @@ pub struct CardStep {
     /// Why this tick's steps ran on the CPU although the card was wanted; `None` while they run
     /// on the card or the card is not wanted.
     pub why_not: Option<String>,
+    /// Read the state back in the background: a tick's steps are submitted with a copy of the
+    /// state that the next tick takes ([`receive_from_card`]), so that no frame waits for the
+    /// card (the app's way); the solver then shows the state one tick behind the card's, and
+    /// [`catch_up`] brings it level. Off: each tick waits for its state.
+    pub background_reads: bool,
     gpu: Option<Gpu>,
     step: Option<GpuStep>,
     /// What the card's copy was made from: the state's revision, particles and obstacles, the
@@ -370,8 +376,50 @@ fn tick_on_card(world: &mut World, card: &mut CardStep, steps: u64) -> Result<()
     let step = card.step.insert(step);
     step.place(world.resource::<Obstacles>().placed());
     step.run(steps as u32);
-    let mut torn = vec![];
-    after_submit(world, step, steps, &mut torn)?;
+    after_run(world, steps);
+    if card.background_reads {
+        // Taken at the start of the next tick ([`receive_from_card`]), by when the card has
+        // run the steps and copied the state while the frame went on.
+        step.begin_read().map_err(|e| e.to_string())?;
+    } else {
+        take_state(world, step, &mut vec![])?;
+    }
     card.edits = world.resource::<Solver>().state.edits;
     Ok(())
+}
+
+/// At the start of a tick, before the ECS's edits go into the solver: the state the last tick's
+/// steps left on the card, read in the background ([`CardStep::background_reads`]), into the
+/// solver. It waits only where the card has not finished those steps and their copy.
+pub fn receive_from_card(world: &mut World) {
+    let Some(mut card) = world.remove_resource::<CardStep>() else {
+        return;
+    };
+    if let Some(step) = card.step.as_ref().filter(|s| s.reading()) {
+        if let Err(e) = take_state(world, step, &mut vec![]) {
+            tracing::warn!("hooke: {e}; stepping on the CPU");
+            card.wanted = false;
+            card.forget_copy();
+            card.why_not = Some(e);
+        }
+        card.edits = world.resource::<Solver>().state.edits;
+    }
+    world.insert_resource(card);
+}
+
+/// Takes the state of a read under way into the solver and the entities now (waiting for the
+/// card): what a library user calls after stepping with [`CardStep::background_reads`] on, to
+/// see the last tick's state rather than the one before it.
+pub fn catch_up(world: &mut World) -> Result<(), String> {
+    let reading = world
+        .get_resource::<CardStep>()
+        .and_then(|c| c.step.as_ref())
+        .is_some_and(GpuStep::reading);
+    if !reading {
+        return Ok(());
+    }
+    receive_from_card(world);
+    world
+        .run_system_cached(super::sync::sync_from_solver)
+        .map_err(|e| e.to_string())
 }

@@ -293,6 +293,10 @@ impl Plugin for SimPlugin {
         app.init_resource::<super::gpu::CardStep>().add_systems(
             FixedUpdate,
             (
+                super::gpu::receive_from_card
+                    .in_set(PhysicsSystems::Prepare)
+                    .after(check_tick)
+                    .before(sync_tick),
                 super::gpu::decide_device
                     .in_set(PhysicsSystems::Prepare)
                     .after(sync_tick)

@@ -109,6 +109,8 @@ pub struct GpuStep {
     contacts: [std::sync::atomic::AtomicUsize; 2],
     /// The read-back's staging buffer, kept between reads.
     staging: std::sync::Mutex<Option<wgpu::Buffer>>,
+    /// A read of the state started and not yet taken ([`Self::begin_read`]).
+    pending: std::sync::Mutex<Option<Read>>,
     /// The contact pass, when the scene has obstacles, or a ground with contact set.
     contact: Option<ContactPass>,
     /// Tearing's pass, when tearing is on.
@@ -122,6 +124,15 @@ pub struct GpuStep {
     /// The particles the step does not move (inverse mass 0: pinned, or held by a drag), with
     /// the position and velocity the card has for each.
     fixed: Vec<(usize, DVec2, DVec2)>,
+}
+
+/// A read under way: the staging buffer the copy went to, the bytes it holds, and the map's
+/// answer.
+#[derive(Debug)]
+struct Read {
+    staging: wgpu::Buffer,
+    total: u64,
+    mapped: std::sync::mpsc::Receiver<Result<(), wgpu::BufferAsyncError>>,
 }
 
 /// Tearing's pipeline and buffers.
@@ -359,6 +370,7 @@ impl GpuStep {
             dashpots,
             contacts: Default::default(),
             staging: Default::default(),
+            pending: Default::default(),
             contact,
             tear,
             xpbd,
@@ -668,8 +680,19 @@ impl GpuStep {
     /// made from: the same particles), waiting for the card. Pinned particles keep their
     /// positions.
     pub fn read_into(&self, state: &mut State) -> Result<(), GpuError> {
+        self.begin_read()?;
+        self.finish_read_into(state)
+    }
+
+    /// Starts reading the state back, as the steps submitted so far leave it, without waiting:
+    /// [`Self::finish_read_into`] takes it. A read already under way is kept.
+    pub fn begin_read(&self) -> Result<(), GpuError> {
+        let mut pending = self.lock_pending()?;
+        if pending.is_some() {
+            return Ok(());
+        }
         let bytes = (self.n as u64) * 2 * self.precision.bytes() as u64;
-        // The last step's contact count comes back in the same copy, a wait saved.
+        // The last step's contact count comes back in the same copy.
         let mut ranges = vec![
             (&self.x[self.current], 0, bytes),
             (&self.v[self.current], 0, bytes),
@@ -677,7 +700,26 @@ impl GpuStep {
         if let Some(c) = &self.contact {
             ranges.push((&c.counter, 0, 16));
         }
-        let view = self.read(&ranges)?;
+        *pending = Some(self.start_read(&ranges)?);
+        Ok(())
+    }
+
+    /// Whether a read was started and not yet taken.
+    pub fn reading(&self) -> bool {
+        self.pending.lock().is_ok_and(|p| p.is_some())
+    }
+
+    /// Takes the read [`Self::begin_read`] started into `state` (the state this was made from),
+    /// waiting for the card only if it has not finished it; without one under way, reads now.
+    /// Pinned particles keep their positions.
+    pub fn finish_read_into(&self, state: &mut State) -> Result<(), GpuError> {
+        let taken = self.lock_pending()?.take();
+        let read = match taken {
+            Some(read) => read,
+            None => return self.read_into(state),
+        };
+        let view = self.end_read(read)?;
+        let bytes = (self.n as u64) * 2 * self.precision.bytes() as u64;
         let (state_bytes, counter) = view.split_at((2 * bytes) as usize);
         let words: Vec<usize> = counter
             .chunks_exact(4)
@@ -704,9 +746,21 @@ impl GpuStep {
         Ok(())
     }
 
+    fn lock_pending(&self) -> Result<std::sync::MutexGuard<'_, Option<Read>>, GpuError> {
+        self.pending
+            .lock()
+            .map_err(|e| GpuError::ReadBack(e.to_string()))
+    }
+
     /// The bytes of the buffers' ranges `(buffer, offset, length)`, one after the other,
     /// waiting for the card.
     fn read(&self, ranges: &[(&wgpu::Buffer, u64, u64)]) -> Result<Vec<u8>, GpuError> {
+        let read = self.start_read(ranges)?;
+        self.end_read(read)
+    }
+
+    /// Copies the ranges into the staging buffer and asks for it mapped, without waiting.
+    fn start_read(&self, ranges: &[(&wgpu::Buffer, u64, u64)]) -> Result<Read, GpuError> {
         let total: u64 = ranges.iter().map(|r| r.2).sum();
         // One staging buffer, kept for the next read (the app reads every tick): a new one
         // only when a read is larger than the last.
@@ -738,18 +792,40 @@ impl GpuStep {
             at += length;
         }
         self.gpu.queue.submit([encoder.finish()]);
-        let slice = staging.slice(..);
         let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
+        staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
             let _ = tx.send(r);
         });
-        self.finish()?;
-        rx.recv()
-            .map_err(|e| GpuError::ReadBack(e.to_string()))?
-            .map_err(|e| GpuError::ReadBack(e.to_string()))?;
-        let bytes = slice.get_mapped_range()[..total as usize].to_vec();
+        Ok(Read {
+            staging,
+            total,
+            mapped: rx,
+        })
+    }
+
+    /// Waits for a started read (at once if the card has finished it) and returns its bytes;
+    /// the staging buffer is kept for the next.
+    fn end_read(&self, read: Read) -> Result<Vec<u8>, GpuError> {
+        let Read {
+            staging,
+            total,
+            mapped,
+        } = read;
+        let done = match mapped.try_recv() {
+            Ok(r) => r,
+            Err(_) => {
+                self.finish()?;
+                mapped
+                    .recv()
+                    .map_err(|e| GpuError::ReadBack(e.to_string()))?
+            }
+        };
+        done.map_err(|e| GpuError::ReadBack(e.to_string()))?;
+        let bytes = staging.slice(..).get_mapped_range()[..total as usize].to_vec();
         staging.unmap();
-        *kept = Some(staging);
+        if let Ok(mut kept) = self.staging.lock() {
+            *kept = Some(staging);
+        }
         Ok(bytes)
     }
 

@@ -8,7 +8,8 @@
 //! (`pairs.wgsl`), tearing at the end of each of the CPU's ticks (`tear.wgsl`), and XPBD in the
 //! CPU's colours and order with the same contact inside its substeps (`xpbd.wgsl`), all in
 //! [`GpuStep`]; in f32, and in f64 where the adapter has `SHADER_F64`. The state stays on the
-//! card between steps and comes back only when asked ([`GpuStep::read_into`]). What does not
+//! card between steps and comes back only when asked ([`GpuStep::read_into`], or started with
+//! [`GpuStep::begin_read`] and taken later, so that the caller need not wait). What does not
 //! run here (the other methods, XPBD to a tolerance, contact by outlines, pressure bodies,
 //! muscles, plasticity) stays on the CPU, and the callers say so ([`GpuStep::unsupported`],
 //! [`crate::sim::gpu`]).
