@@ -734,3 +734,137 @@ fn a_drag_on_the_card(background: bool) {
     println!("{d:e} m");
     assert!(d < 1e-9, "a particle is {d} m off the CPU's drag");
 }
+
+/// The card draws its state (`Painter`): after 300 steps of the cloth32 on the card, each
+/// particle's hexagon is centred on its position and each spring's quad spans its ends, to
+/// f32's rounding, the pinned row in the pinned colour; written at an unaligned place in a
+/// larger buffer, whose other bytes stay as they were.
+#[test]
+fn the_card_draws_its_state() {
+    use hooke::solver::gpu::{
+        DOT_CORNERS, DrawStyle, DrawTarget, DrawTargets, Painter, SPRING_CORNERS, VERTEX_BYTES,
+    };
+    let Some(gpu) = card() else { return };
+    let mut app = cloth32(Integrator::SymplecticEuler);
+    sim::gpu::advance_on_gpu(app.world_mut(), &gpu, Precision::F32, 300).unwrap();
+    // The state after them, on the card again.
+    let step = sim::gpu::card_for(app.world_mut(), &gpu, Precision::F32).unwrap();
+    let state = solver(&app).state();
+    let source = step.draw_source().expect("cloth32 fits");
+    let (n, springs) = (source.particles(), source.springs());
+    let (spring_vertices, dot_vertices) = (springs * SPRING_CORNERS, n * DOT_CORNERS);
+    // The springs from vertex 3, the dots after them and 5 more: offsets no binding aligns to.
+    let (spring_at, dot_at) = (3, 3 + spring_vertices + 5);
+    let total = u64::from(dot_at + dot_vertices + 2) * VERTEX_BYTES;
+    let device = gpu.device();
+    let fill = 0x7fu8;
+    let target = wgpu::util::DeviceExt::create_buffer_init(
+        device,
+        &wgpu::util::BufferInitDescriptor {
+            label: None,
+            contents: &vec![fill; total as usize],
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        },
+    );
+    let (free, pinned) = ([1.0, 1.0, 1.0, 1.0], [1.0, 0.5, 0.0, 1.0]);
+    let style = DrawStyle {
+        half_width: 0.001,
+        radius: 0.004,
+        full_strain: 0.05,
+        palette: vec![
+            [0.0, 0.0, 1.0, 1.0],
+            [0.5, 0.5, 0.5, 1.0],
+            [1.0, 0.0, 0.0, 1.0],
+        ],
+        free,
+        pinned,
+        held_colour: [0.0, 1.0, 1.0, 1.0],
+        held: None,
+    };
+    let mut painter = Painter::new(device);
+    let mut encoder = device.create_command_encoder(&Default::default());
+    let targets = DrawTargets {
+        springs: Some(DrawTarget {
+            buffer: &target,
+            first_vertex: spring_at,
+            vertices: spring_vertices,
+        }),
+        dots: Some(DrawTarget {
+            buffer: &target,
+            first_vertex: dot_at,
+            vertices: dot_vertices,
+        }),
+    };
+    painter.record(
+        (device, gpu.queue()),
+        &mut encoder,
+        &source,
+        &style,
+        targets,
+    );
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: total,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    encoder.copy_buffer_to_buffer(&target, 0, &staging, 0, total);
+    gpu.queue().submit([encoder.finish()]);
+    staging.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+    device.poll(wgpu::PollType::wait_indefinitely()).unwrap();
+    let bytes = staging.slice(..).get_mapped_range().to_vec();
+    let floats: Vec<f32> = bytes
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    let vertex = |v: u32| &floats[7 * v as usize..7 * v as usize + 7];
+    let near = |p: &[f32], q: bevy::math::DVec2, tol: f64| {
+        ((f64::from(p[0]) - q.x).hypot(f64::from(p[1]) - q.y)) <= tol
+    };
+    for i in 0..n {
+        let x = state.x()[i as usize];
+        let corners: Vec<&[f32]> = (0..DOT_CORNERS)
+            .map(|k| vertex(dot_at + DOT_CORNERS * i + k))
+            .collect();
+        let centre = corners.iter().fold(bevy::math::DVec2::ZERO, |c, p| {
+            c + bevy::math::DVec2::new(f64::from(p[0]), f64::from(p[1])) / f64::from(DOT_CORNERS)
+        });
+        assert!(
+            (centre - x).length() < 1e-5,
+            "particle {i}: hexagon at {centre}, state at {x}"
+        );
+        assert!(corners.iter().all(|p| near(p, x, 0.004 + 1e-5)));
+        let colour = if state.inv_mass()[i as usize] == 0.0 {
+            pinned
+        } else {
+            free
+        };
+        assert_eq!(corners[0][3..7], colour, "particle {i}'s colour");
+    }
+    for (s, spring) in state.springs().iter().enumerate() {
+        let (a, b) = (state.x()[spring.a as usize], state.x()[spring.b as usize]);
+        let quad: Vec<&[f32]> = (0..SPRING_CORNERS)
+            .map(|k| vertex(spring_at + SPRING_CORNERS * s as u32 + k))
+            .collect();
+        assert!(
+            near(quad[0], a, 0.001 + 1e-5) && near(quad[1], a, 0.001 + 1e-5),
+            "spring {s}"
+        );
+        assert!(
+            near(quad[2], b, 0.001 + 1e-5) && near(quad[3], b, 0.001 + 1e-5),
+            "spring {s}"
+        );
+    }
+    // Outside the runs, nothing was written.
+    let untouched = |v: u32| {
+        bytes[(v as u64 * VERTEX_BYTES) as usize..((v + 1) as u64 * VERTEX_BYTES) as usize]
+            .iter()
+            .all(|&b| b == fill)
+    };
+    for v in (0..spring_at)
+        .chain(spring_at + spring_vertices..dot_at)
+        .chain(dot_at + dot_vertices..dot_at + dot_vertices + 2)
+    {
+        assert!(untouched(v), "vertex {v} outside the runs was written");
+    }
+}

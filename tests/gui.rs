@@ -828,7 +828,25 @@ fn every_control_works_under_real_input_and_the_log_stays_quiet() {
     s.x(&["keydown", "ctrl"]);
     s.drag("1", (0.3, 0.95), (0.3, 0.6), 6);
     s.x(&["keyup", "ctrl"]);
-    s.expect("the cloth cut", |st| counts(st).1 < springs0);
+    let cut = counts(&s.expect("the cloth cut", |st| counts(st).1 < springs0)).1;
+    // On the card the cloth is drawn from its buffers (a compute pass writes the meshes), and
+    // a grab there still lets go.
+    s.move_px(95, 179);
+    s.x(&["click", "1"]);
+    s.expect("drawn from the card", |st| {
+        st["device"] == "gpu"
+            && st["drawn_on_card"] == true
+            && st["frames_drawn_on_card"].as_u64().is_some_and(|n| n > 0)
+    });
+    s.drag("1", (0.5, 0.5), (0.7, 0.4), 6);
+    s.expect("the grab on the card over", |st| {
+        st["held"] == 0 && st["device"] == "gpu" && counts(st).1 == cut
+    });
+    s.move_px(95, 179);
+    s.x(&["click", "1"]);
+    s.expect("drawn on the CPU again", |st| {
+        st["device"] == "cpu" && st["drawn_on_card"] == false
+    });
     let bad = bad_lines(&s.log()).join("\n");
     assert!(
         bad.is_empty(),

@@ -259,6 +259,14 @@ impl CardStep {
         self.active
     }
 
+    /// What a drawing of the card's state reads, while the ticks step there.
+    pub fn draw_source(&self) -> Option<crate::solver::gpu::DrawSource> {
+        self.step
+            .as_ref()
+            .filter(|_| self.active)
+            .and_then(GpuStep::draw_source)
+    }
+
     /// Lets the card's copy of the state go: the next tick on the card uploads it afresh.
     fn forget_copy(&mut self) {
         self.active = false;

@@ -46,6 +46,7 @@ pub struct AppState<'w, 's> {
     pinned: Query<'w, 's, (), (With<Particle>, With<Pinned>)>,
     obstacles: Query<'w, 's, &'static crate::sim::ObstaclePose, With<crate::sim::Obstacle>>,
     card: Res<'w, crate::sim::gpu::CardStep>,
+    picture: Res<'w, super::card_draw::CardPicture>,
 }
 
 /// Scenes up to this many particles list their positions in the status report.
@@ -113,6 +114,9 @@ pub fn drive(
             "adapter": app.card.adapter(),
             "gpu_wanted": app.card.wanted,
             "gpu_why_not": app.card.why_not,
+            // Whether the meshes are drawn from the card's buffers, and frames drawn so.
+            "drawn_on_card": app.picture.active(),
+            "frames_drawn_on_card": app.picture.frames_drawn(),
             // In scene order (creation order), for scenes up to REPORT_POSITIONS particles.
             "positions": (solver.particle_count() <= REPORT_POSITIONS)
                 .then(|| solver.x.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>()),

@@ -17,9 +17,9 @@ use bevy::prelude::*;
 pub const BACKGROUND: Color = Color::srgb(0.07, 0.08, 0.10);
 const FRAME: Color = Color::srgb(0.30, 0.32, 0.38);
 const GROUND: Color = Color::srgb(0.55, 0.45, 0.30);
-const PARTICLE: Color = Color::srgb(0.95, 0.95, 0.95);
-const PINNED: Color = Color::srgb(1.0, 0.75, 0.2);
-const HELD: Color = Color::srgb(0.35, 0.85, 1.0);
+pub(super) const PARTICLE: Color = Color::srgb(0.95, 0.95, 0.95);
+pub(super) const PINNED: Color = Color::srgb(1.0, 0.75, 0.2);
+pub(super) const HELD: Color = Color::srgb(0.35, 0.85, 1.0);
 const ATTRACTION: Color = Color::srgba(0.35, 0.85, 1.0, 0.8);
 const OBSTACLE: Color = Color::srgb(0.55, 0.75, 0.45);
 /// An obstacle being built (the drag's preview).
@@ -27,18 +27,18 @@ const BUILDING: Color = Color::srgb(0.95, 0.8, 0.35);
 /// Particle dot radius, in logical pixels.
 const DOT_PX: f32 = 3.5;
 /// Half the width of a spring line, in logical pixels.
-const SPRING_HALF_PX: f32 = 0.8;
+pub(super) const SPRING_HALF_PX: f32 = 0.8;
 /// Corners of a dot: a hexagon is round at a few pixels, in four triangles (a software
 /// rasterizer's cost goes by the triangle, and a 64×64 cloth has 4,096 dots).
-const DOT_SIDES: u32 = 6;
+const DOT_SIDES: u32 = crate::solver::gpu::DOT_CORNERS;
 /// Relative extension drawn in full colour (red stretched, blue compressed).
-const FULL_STRAIN: f32 = 0.05;
+pub(super) const FULL_STRAIN: f32 = 0.05;
 
 /// The two batched meshes.
 #[derive(Resource)]
 pub struct Batches {
-    springs: Handle<Mesh>,
-    dots: Handle<Mesh>,
+    pub(super) springs: Handle<Mesh>,
+    pub(super) dots: Handle<Mesh>,
 }
 
 /// Spawns the spring and dot meshes, empty, with a white material that the vertex colours tint.
@@ -74,7 +74,15 @@ fn empty_mesh() -> Mesh {
     mesh
 }
 
-/// Rebuilds both meshes from the solver when it or the view changed.
+/// A particle's drawn radius: a dot, or with contact on its collision radius (never smaller than
+/// a dot), so that what touches is seen touching.
+pub(super) fn dot_radius(view: &CanvasView, params: &SimParams) -> f32 {
+    let contact_radius = params.contact.map_or(0.0, |c| c.radius) as f32;
+    (DOT_PX / view.scale).max(contact_radius)
+}
+
+/// Rebuilds both meshes from the solver when it or the view changed. While the card draws them
+/// ([`super::card_draw`]) only their sizes follow the solver: their vertices are the card's.
 #[allow(clippy::too_many_arguments)] // a Bevy system: its parameters are what it reads
 pub fn update_batches(
     batches: Res<Batches>,
@@ -85,10 +93,18 @@ pub fn update_batches(
     gesture: Res<Gesture>,
     indices: Query<&SolverIndex>,
     params: Res<SimParams>,
+    card: Option<Res<crate::sim::gpu::CardStep>>,
+    mut sizes: Local<(usize, usize)>,
 ) {
     if !(solver.is_changed() || view.is_changed() || gesture.is_changed() || params.is_changed()) {
         return;
     }
+    let counts = (solver.springs.len(), solver.x.len());
+    let on_card = card.is_some_and(|c| c.draw_source().is_some());
+    if on_card && *sizes == counts {
+        return;
+    }
+    *sizes = counts;
     // The grabbed particle is drawn in its own colour.
     let held_index = match *gesture {
         Gesture::Grab { particle, .. } => indices.get(particle).ok().map(|i| i.0 as usize),
@@ -124,10 +140,7 @@ pub fn update_batches(
         );
     }
     if let Some(mut mesh) = meshes.get_mut(&batches.dots) {
-        // With contact on, a particle is drawn at its collision radius (never smaller than a
-        // dot), so that what touches is seen touching.
-        let contact_radius = params.contact.map_or(0.0, |c| c.radius) as f32;
-        let radius = (DOT_PX / view.scale).max(contact_radius);
+        let radius = dot_radius(&view, &params);
         let rim: Vec<Vec2> = (0..DOT_SIDES)
             .map(|i| Vec2::from_angle(i as f32 * std::f32::consts::TAU / DOT_SIDES as f32) * radius)
             .collect();
@@ -217,7 +230,7 @@ impl Attribute for [f32; 4] {
 }
 
 /// Vertex colours are linear RGBA.
-fn linear(color: Color) -> [f32; 4] {
+pub(super) fn linear(color: Color) -> [f32; 4] {
     color.to_linear().to_f32_array()
 }
 
@@ -227,6 +240,11 @@ pub struct StrainPalette([[f32; 4]; Self::STEPS]);
 
 impl StrainPalette {
     const STEPS: usize = 129;
+
+    /// The palette's colours, from fully compressed to fully stretched.
+    pub(super) fn entries(&self) -> &[[f32; 4]] {
+        &self.0
+    }
 
     fn color(&self, strain: f32) -> [f32; 4] {
         let t = (strain / FULL_STRAIN).clamp(-1.0, 1.0);

@@ -2,6 +2,7 @@
 
 mod actions;
 mod automation;
+mod card_draw;
 mod controls;
 mod draw;
 mod edit;
@@ -42,6 +43,7 @@ impl Plugin for AppPlugin {
         let scene = self.scene.clone();
         let start_running = self.options.start_running;
         let gpu = self.options.gpu;
+        app.add_plugins(card_draw::CardDrawPlugin);
         app.insert_resource(ClearColor(draw::BACKGROUND))
             .insert_resource(self.options.clone())
             .init_resource::<view::CanvasView>()

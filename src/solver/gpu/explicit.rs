@@ -124,6 +124,9 @@ pub struct GpuStep {
     /// The particles the step does not move (inverse mass 0: pinned, or held by a drag), with
     /// the position and velocity the card has for each.
     fixed: Vec<(usize, DVec2, DVec2)>,
+    /// Inverse masses, and each spring's ends and rest length for the drawing (`draw.rs`).
+    inv_mass: wgpu::Buffer,
+    drawn_springs: wgpu::Buffer,
 }
 
 /// A read under way: the staging buffer the copy went to, the bytes it holds, and the map's
@@ -298,6 +301,12 @@ impl GpuStep {
             })
         };
         let groups = [bind(0), bind(1)];
+        // Each spring's ends and rest length (f32), for the drawing.
+        let drawn: Vec<u8> = (state.springs.iter())
+            .flat_map(|s| [s.a, s.b, (s.rest as f32).to_bits(), 0])
+            .flat_map(u32::to_le_bytes)
+            .collect();
+        let drawn_springs = init("drawn springs", &drawn, storage);
         let pairs = settings
             .contact
             .is_some_and(|c| c.particles && c.radius > 0.0)
@@ -377,6 +386,8 @@ impl GpuStep {
             since_tear: 0,
             link_spring,
             fixed: fixed(state),
+            inv_mass: w,
+            drawn_springs,
         };
         step.set(settings, state.external_active);
         step.set_tear(settings);
@@ -827,6 +838,27 @@ impl GpuStep {
             *kept = Some(staging);
         }
         Ok(bytes)
+    }
+
+    /// The buffers the drawing reads: the positions (ping-ponged) and which holds the state,
+    /// the inverse masses, and the springs' ends and rest lengths; and the most bytes the
+    /// device binds as one storage buffer.
+    pub(super) fn draw_buffers(
+        &self,
+    ) -> ([wgpu::Buffer; 2], usize, wgpu::Buffer, wgpu::Buffer, u64) {
+        let limits = self.gpu.device.limits();
+        (
+            self.x.clone(),
+            self.current,
+            self.inv_mass.clone(),
+            self.drawn_springs.clone(),
+            limits.max_storage_buffer_binding_size,
+        )
+    }
+
+    /// Particles in the uploaded state.
+    pub fn particle_count(&self) -> usize {
+        self.n as usize
     }
 
     /// Steps taken on the card since it was made.

@@ -18,9 +18,14 @@
 //! an app hands over its renderer's. Nothing here names an engine type.
 
 mod context;
+mod draw;
 mod explicit;
 mod pairs;
 mod xpbd;
 
 pub use context::{Gpu, GpuError, Precision};
+pub use draw::{
+    DOT_CORNERS, DrawSource, DrawStyle, DrawTarget, DrawTargets, Painter, SPRING_CORNERS,
+    VERTEX_BYTES,
+};
 pub use explicit::{ExplicitMethod, ExplicitSettings, GpuStep, TearSettings};
