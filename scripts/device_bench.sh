@@ -2,7 +2,8 @@
 # The card's figures in one run on a machine with an NVIDIA card (docs/gpu.md, "Figures that
 # wait for a card"): the reference cloth's sums in f32 and f64 on the card, then
 # `hooke bench gpu` at 256², 1024² and 2048² (the CPU beside the card, one and many steps a
-# submit, f32 and f64, and XPBD at a frame's step). Writes everything under $OUT (or ./out).
+# submit, f32 and f64, and XPBD at a frame's step without contact and with particle pairs).
+# Writes everything under $OUT (or ./out).
 #
 # It needs a release binary built where it will run (x86-64, the `gpu` feature: the default
 # build, or a smaller headless one with `cargo build --release --no-default-features --features

@@ -239,6 +239,8 @@ pub struct CardStep {
     edits: u64,
     /// Whether the last tick's steps ran on the card.
     active: bool,
+    /// The last tick's submit time and steps, while its state is read in the background.
+    submitted: Option<(std::time::Duration, u64)>,
 }
 
 impl CardStep {
@@ -335,11 +337,20 @@ pub fn run_steps_on_card(world: &mut World) {
         card.forget_copy();
         card.why_not = Some(e);
     }
+    let submitted = start.elapsed();
+    let reading = card.step.as_ref().is_some_and(GpuStep::reading);
+    if reading {
+        // The steps' cost is known once their state comes back: the next tick's wait adds to
+        // the submit's time ([`receive_from_card`]), so that the frame budget sees what the
+        // card takes, not only what it took to ask.
+        card.submitted = Some((submitted, steps));
+    }
     world.insert_resource(card);
-    let taken = steps;
-    world
-        .resource_mut::<super::schedule::StepBudget>()
-        .note_steps(start.elapsed(), taken);
+    if !reading {
+        world
+            .resource_mut::<super::schedule::StepBudget>()
+            .note_steps(submitted, steps);
+    }
 }
 
 fn tick_on_card(world: &mut World, card: &mut CardStep, steps: u64) -> Result<(), String> {
@@ -404,7 +415,14 @@ pub fn receive_from_card(world: &mut World) {
         return;
     };
     if let Some(step) = card.step.as_ref().filter(|s| s.reading()) {
-        if let Err(e) = take_state(world, step, &mut vec![]) {
+        let start = std::time::Instant::now();
+        let taken = take_state(world, step, &mut vec![]);
+        if let Some((submit, steps)) = card.submitted.take() {
+            world
+                .resource_mut::<super::schedule::StepBudget>()
+                .note_steps(submit + start.elapsed(), steps);
+        }
+        if let Err(e) = taken {
             tracing::warn!("hooke: {e}; stepping on the CPU");
             card.wanted = false;
             card.forget_copy();

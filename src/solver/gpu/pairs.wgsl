@@ -272,7 +272,10 @@ fn pair_settle(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgr
 }
 
 // The velocity pass (pairs.rs: `respond`): each touching pair's relative velocity through
-// `respond`, each particle taking its inverse-mass share, averaged over its contacts.
+// `respond`, each particle taking its inverse-mass share, averaged over its contacts. Its walk
+// over the grid is `pair_separate`'s: WGSL has no closures, and one function for both would
+// bind the velocities to the iterations too, past the 8 storage buffers a stage binds by
+// default.
 @compute @workgroup_size(256)
 fn pair_respond(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = thread(id, groups);
