@@ -95,7 +95,6 @@ fn after_run(world: &mut World, n: u64) {
 /// `torn`, its entity at the end of the run), the last step's contacts, the energy peak when
 /// one is kept, and a blow-up's status. Returns whether the state is finite.
 fn take_state(world: &mut World, card: &GpuStep, torn: &mut Vec<usize>) -> Result<bool, String> {
-    let params = world.resource::<SimParams>().clone();
     {
         let mut solver = world.resource_mut::<Solver>();
         card.finish_read_into(&mut solver.state)
@@ -114,7 +113,7 @@ fn take_state(world: &mut World, card: &GpuStep, torn: &mut Vec<usize>) -> Resul
     let solver = world.resource::<Solver>();
     let finite = !solver.non_finite;
     if world.contains_resource::<EnergyPeak>() {
-        let energy = solver.energy(params.gravity).total();
+        let energy = solver.energy(world.resource::<SimParams>().gravity).total();
         world.resource_mut::<EnergyPeak>().note(energy);
     }
     if !finite {
@@ -269,6 +268,15 @@ impl CardStep {
             .and_then(GpuStep::draw_source)
     }
 
+    /// The card failed (a device lost, a buffer refused): the steps go back to the CPU, and the
+    /// panel says why.
+    fn give_up(&mut self, why: String) {
+        tracing::warn!("hooke: {why}; stepping on the CPU");
+        self.wanted = false;
+        self.forget_copy();
+        self.why_not = Some(why);
+    }
+
     /// Lets the card's copy of the state go: the next tick on the card uploads it afresh.
     fn forget_copy(&mut self) {
         self.active = false;
@@ -330,12 +338,7 @@ pub fn run_steps_on_card(world: &mut World) {
         return;
     };
     if let Err(e) = tick_on_card(world, &mut card, steps) {
-        // The card failed (a device lost, a buffer refused): the steps go back to the CPU,
-        // and the panel says why.
-        tracing::warn!("hooke: {e}; stepping on the CPU");
-        card.wanted = false;
-        card.forget_copy();
-        card.why_not = Some(e);
+        card.give_up(e);
     }
     let submitted = start.elapsed();
     let reading = card.step.as_ref().is_some_and(GpuStep::reading);
@@ -411,10 +414,16 @@ fn tick_on_card(world: &mut World, card: &mut CardStep, steps: u64) -> Result<()
 /// steps left on the card, read in the background ([`CardStep::background_reads`]), into the
 /// solver. It waits only where the card has not finished those steps and their copy.
 pub fn receive_from_card(world: &mut World) {
+    receive(world);
+}
+
+/// Takes the state of a read under way, if there is one; returns whether there was.
+fn receive(world: &mut World) -> bool {
     let Some(mut card) = world.remove_resource::<CardStep>() else {
-        return;
+        return false;
     };
-    if let Some(step) = card.step.as_ref().filter(|s| s.reading()) {
+    let reading = card.step.as_ref().is_some_and(GpuStep::reading);
+    if let Some(step) = card.step.as_ref().filter(|_| reading) {
         let start = std::time::Instant::now();
         let taken = take_state(world, step, &mut vec![]);
         if let Some((submit, steps)) = card.submitted.take() {
@@ -423,28 +432,20 @@ pub fn receive_from_card(world: &mut World) {
                 .note_steps(submit + start.elapsed(), steps);
         }
         if let Err(e) = taken {
-            tracing::warn!("hooke: {e}; stepping on the CPU");
-            card.wanted = false;
-            card.forget_copy();
-            card.why_not = Some(e);
+            card.give_up(e);
         }
-        card.edits = world.resource::<Solver>().state.edits;
     }
     world.insert_resource(card);
+    reading
 }
 
 /// Takes the state of a read under way into the solver and the entities now (waiting for the
 /// card): what a library user calls after stepping with [`CardStep::background_reads`] on, to
 /// see the last tick's state rather than the one before it.
 pub fn catch_up(world: &mut World) -> Result<(), String> {
-    let reading = world
-        .get_resource::<CardStep>()
-        .and_then(|c| c.step.as_ref())
-        .is_some_and(GpuStep::reading);
-    if !reading {
+    if !receive(world) {
         return Ok(());
     }
-    receive_from_card(world);
     world
         .run_system_cached(super::sync::sync_from_solver)
         .map_err(|e| e.to_string())

@@ -105,10 +105,7 @@ fn choose_picture(
         }
         return;
     };
-    let held = match *gesture {
-        Gesture::Grab { particle, .. } => indices.get(particle).ok().map(|i| i.0),
-        _ => None,
-    };
+    let held = draw::held(&gesture, &indices);
     let style = DrawStyle {
         half_width: draw::SPRING_HALF_PX / view.scale,
         radius: draw::dot_radius(&view, &params),

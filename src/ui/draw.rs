@@ -74,6 +74,14 @@ fn empty_mesh() -> Mesh {
     mesh
 }
 
+/// The solver index of the particle a grab holds, if one does: drawn in its own colour.
+pub(super) fn held(gesture: &Gesture, indices: &Query<&SolverIndex>) -> Option<u32> {
+    match *gesture {
+        Gesture::Grab { particle, .. } => indices.get(particle).ok().map(|i| i.0),
+        _ => None,
+    }
+}
+
 /// A particle's drawn radius: a dot, or with contact on its collision radius (never smaller than
 /// a dot), so that what touches is seen touching.
 pub(super) fn dot_radius(view: &CanvasView, params: &SimParams) -> f32 {
@@ -106,10 +114,7 @@ pub fn update_batches(
     }
     *sizes = counts;
     // The grabbed particle is drawn in its own colour.
-    let held_index = match *gesture {
-        Gesture::Grab { particle, .. } => indices.get(particle).ok().map(|i| i.0 as usize),
-        _ => None,
-    };
+    let held_index = held(&gesture, &indices).map(|i| i as usize);
     if let Some(mut mesh) = meshes.get_mut(&batches.springs) {
         let half = SPRING_HALF_PX / view.scale;
         fill(

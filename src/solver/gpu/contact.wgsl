@@ -65,6 +65,11 @@ struct Obstacle {
 // particle pairs.
 @group(0) @binding(6) var<storage, read_write> counter: array<atomic<u32>, 4>;
 
+// A thread's index in a dispatch of work groups of 256, rows of at most 65535 groups.
+fn thread(id: vec3<u32>, groups: vec3<u32>) -> u32 {
+    return id.x + id.y * groups.x * 256u;
+}
+
 fn is_circle(o: Obstacle) -> bool { return o.kind < 0.5; }
 fn is_box(o: Obstacle) -> bool { return o.kind > 0.5 && o.kind < 1.5; }
 fn is_segment(o: Obstacle) -> bool { return o.kind > 1.5; }
@@ -376,7 +381,7 @@ fn place(at: vec2<real>, start: vec2<real>, heading: vec2<real>, v_in: vec2<real
 
 @compute @workgroup_size(256)
 fn collide(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = id.x + id.y * groups.x * 256u;
+    let i = thread(id, groups);
     if (i >= p.n || inv_mass[i] == real(0.0)) {
         return;
     }
@@ -407,7 +412,7 @@ fn collide(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
 
 @compute @workgroup_size(256)
 fn enter(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = id.x + id.y * groups.x * 256u;
+    let i = thread(id, groups);
     if (i >= p.n || inv_mass[i] == real(0.0)) { return; }
     let at = iterate[i];
     iterate[i] = place(at, at, heading_before[i], vec2<real>(0.0, 0.0), false).x;
@@ -415,7 +420,7 @@ fn enter(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) 
 
 @compute @workgroup_size(256)
 fn hold_out(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = id.x + id.y * groups.x * 256u;
+    let i = thread(id, groups);
     if (i >= p.n || inv_mass[i] == real(0.0)) { return; }
     iterate[i] = place(iterate[i], substep_start[i], heading_before[i], vec2<real>(0.0, 0.0), false).x;
 }
@@ -425,7 +430,7 @@ fn hold_out(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroup
 // share of the approach it had before contact, above the rest speed.
 @compute @workgroup_size(256)
 fn settle(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = id.x + id.y * groups.x * 256u;
+    let i = thread(id, groups);
     if (i >= p.n || inv_mass[i] == real(0.0)) { return; }
     let x = x_end[i];
     let pre = heading_before[i];

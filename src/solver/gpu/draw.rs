@@ -7,13 +7,11 @@
 //! with the first vertex of each shape's run; an app finds those in its renderer's meshes.
 
 use super::context::Precision;
-use super::explicit::{GpuStep, entries, pipeline, shader};
+use super::explicit::{GpuStep, entries, pipeline, shader, shape};
 
 const SOURCE: &str = include_str!("draw.wgsl");
 /// Threads in a work group (the kernels' `@workgroup_size`).
 const GROUP: u32 = 64;
-/// The most work groups along one side of a dispatch.
-const MAX_GROUPS: u32 = 65_535;
 /// Vertices of a spring's quad and of a particle's hexagon.
 pub const SPRING_CORNERS: u32 = 4;
 /// Vertices of a particle's hexagon.
@@ -232,11 +230,10 @@ impl Painter {
                 layout: &pipeline.get_bind_group_layout(0),
                 entries: &e,
             });
-            let groups = items.div_ceil(GROUP);
-            let across = groups.min(MAX_GROUPS);
+            let (across, down) = shape(u64::from(items), GROUP);
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(across, groups.div_ceil(across), 1);
+            pass.dispatch_workgroups(across, down, 1);
         };
         if let Some((target, _)) = springs {
             let list = [

@@ -177,7 +177,6 @@ struct InSolvePass {
     enter: (wgpu::ComputePipeline, wgpu::BindGroup),
     hold_out: (wgpu::ComputePipeline, wgpu::BindGroup),
     settle: (wgpu::ComputePipeline, wgpu::BindGroup),
-    particles: (u32, u32),
 }
 
 impl GpuStep {
@@ -277,9 +276,7 @@ impl GpuStep {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let groups_needed = (n as u32).div_ceil(GROUP).max(1);
-        let across = groups_needed.min(MAX_GROUPS);
-        let dispatch = (across, groups_needed.div_ceil(across));
+        let dispatch = shape(n as u64, GROUP);
         let layout = pipeline.get_bind_group_layout(0);
         let bind = |from: usize| {
             let (x, v) = ([&x0, &x1], [&v0, &v1]);
@@ -1050,9 +1047,6 @@ impl ContactPass {
                 (pipeline, group)
             };
             let o = &obstacles;
-            let n = (xp.pos.size() / (2 * precision.bytes() as u64)).max(1);
-            let groups = n.div_ceil(u64::from(GROUP)) as u32;
-            let across = groups.min(MAX_GROUPS);
             InSolvePass {
                 enter: bind(
                     "enter",
@@ -1087,7 +1081,6 @@ impl ContactPass {
                         (25, &xp.heading),
                     ],
                 ),
-                particles: (across, groups.div_ceil(across)),
             }
         });
         ContactPass {
@@ -1139,27 +1132,23 @@ impl ContactPass {
         dispatch(pass, &self.advance, &self.advance_group, obstacles);
     }
 
-    /// Records the iterate held out of the surfaces before XPBD's first prediction.
-    pub(super) fn record_entry(&self, pass: &mut wgpu::ComputePass) {
+    /// Records the iterate held out of the surfaces before XPBD's first prediction, over the
+    /// dispatch shape `particles`.
+    pub(super) fn record_entry(&self, pass: &mut wgpu::ComputePass, particles: (u32, u32)) {
         if let Some(inside) = self.inside.as_ref().filter(|_| self.has_surfaces()) {
-            dispatch(pass, &inside.enter.0, &inside.enter.1, inside.particles);
+            dispatch(pass, &inside.enter.0, &inside.enter.1, particles);
         }
     }
 
     /// Records the contact after one of XPBD's substeps: pairs pushed apart, then the iterate
     /// held out of the surfaces along its path from the substep's start.
-    pub(super) fn record_substep_end(&self, pass: &mut wgpu::ComputePass) {
+    pub(super) fn record_substep_end(&self, pass: &mut wgpu::ComputePass, particles: (u32, u32)) {
         let Some(inside) = &self.inside else { return };
         if let Some(pairs) = &self.pairs {
             pairs.record_pushes(pass, 1);
         }
         if self.has_surfaces() {
-            dispatch(
-                pass,
-                &inside.hold_out.0,
-                &inside.hold_out.1,
-                inside.particles,
-            );
+            dispatch(pass, &inside.hold_out.0, &inside.hold_out.1, particles);
         }
     }
 }
@@ -1196,6 +1185,14 @@ pub(super) fn pipeline(
         compilation_options: Default::default(),
         cache: None,
     })
+}
+
+/// A dispatch's shape for `threads` threads in work groups of `group`: at most [`MAX_GROUPS`]
+/// groups a row, and at least one group (a kernel indexes its thread as `x + y · row`).
+pub(super) fn shape(threads: u64, group: u32) -> (u32, u32) {
+    let groups = threads.div_ceil(u64::from(group)).max(1) as u32;
+    let across = groups.min(MAX_GROUPS);
+    (across, groups.div_ceil(across))
 }
 
 /// One compute pass, recorded by `record`, submitted (not waited for).

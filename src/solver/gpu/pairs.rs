@@ -9,13 +9,11 @@
 //! cheaper than the reduction that would tell when it is due.
 
 use super::context::{Gpu, Precision};
-use super::explicit::{buffer, dispatch, entries, pipeline};
+use super::explicit::{buffer, dispatch, entries, pipeline, shape};
 use crate::solver::contact::pairs::MAX_ITERATIONS;
 
 /// Threads in a work group (the kernels' `@workgroup_size`).
 const GROUP: u32 = 256;
-/// The most work groups along one side of a dispatch.
-const MAX_GROUPS: u32 = 65_535;
 /// The uniform slots' stride: wgpu's least offset alignment for uniform bindings.
 const SLOT: u64 = 256;
 /// The control words (`pairs.wgsl`'s `control`).
@@ -70,21 +68,14 @@ pub(super) struct PairPass {
     begin: wgpu::ComputePipeline,
     follow: wgpu::ComputePipeline,
     targets: Vec<Target>,
-    /// Work groups over the particles, over the slots (and their sum), and blocks of slots.
+    /// Work groups over the particles, and over the slots and their sum (a group a block of
+    /// the prefix sum's first level).
     particles: (u32, u32),
     slots: (u32, u32),
-    blocks: (u32, u32),
 }
 
 /// Jacobi passes over the pairs after each of XPBD's substeps (the CPU's `PAIR_PASSES`).
 const PUSHES: usize = 2;
-
-/// A dispatch's shape for `threads` threads: at most [`MAX_GROUPS`] groups a row.
-fn shape(threads: u64) -> (u32, u32) {
-    let groups = threads.div_ceil(u64::from(GROUP)).max(1) as u32;
-    let across = groups.min(MAX_GROUPS);
-    (across, groups.div_ceil(across))
-}
 
 impl PairPass {
     /// The table's slots for `n` particles.
@@ -239,12 +230,8 @@ impl PairPass {
             begin,
             follow,
             targets,
-            particles: shape(n64),
-            slots: shape(u64::from(table) + 1),
-            blocks: {
-                let across = (blocks as u32).min(MAX_GROUPS);
-                (across, (blocks as u32).div_ceil(across))
-            },
+            particles: shape(n64, GROUP),
+            slots: shape(u64::from(table) + 1, GROUP),
         }
     }
 
@@ -253,7 +240,7 @@ impl PairPass {
         let run = dispatch;
         run(pass, &self.clear.0, &self.clear.1, self.slots);
         run(pass, &self.count, &target.count, self.particles);
-        run(pass, &self.scan_groups.0, &self.scan_groups.1, self.blocks);
+        run(pass, &self.scan_groups.0, &self.scan_groups.1, self.slots);
         run(pass, &self.scan_sums.0, &self.scan_sums.1, (1, 1));
         run(pass, &self.scan_add.0, &self.scan_add.1, self.slots);
         run(pass, &self.fill.0, &self.fill.1, self.particles);

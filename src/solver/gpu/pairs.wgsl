@@ -57,16 +57,9 @@ struct Round {
 
 var<workgroup> part: array<u32, 256>;
 
-fn thread(id: vec3<u32>, groups: vec3<u32>) -> u32 {
-    return id.x + id.y * groups.x * 256u;
-}
-
 fn group_index(wid: vec3<u32>, groups: vec3<u32>) -> u32 {
     return wid.x + wid.y * groups.x;
 }
-
-// The hash's slots (a power of two), and each slot's entries start at grid[slot].
-fn table() -> u32 { return p.table; }
 
 fn cell_of(at: vec2<real>) -> vec2<i32> {
     // A conversion out of i32's range saturates: a particle flung far has its cell at the end.
@@ -78,7 +71,7 @@ fn slot(c: vec2<i32>) -> u32 {
     // the slots differ, which changes which particles share a slot but not which pairs are
     // found).
     let h = (c.x * 92837111) ^ (c.y * 689287499);
-    return u32(h) & (table() - 1u);
+    return u32(h) & (p.table - 1u);
 }
 
 // Whether a spring joins i and j.
@@ -107,7 +100,7 @@ fn keep_out(at: vec2<real>) -> vec2<real> {
 @compute @workgroup_size(256)
 fn pair_clear(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let e = thread(id, groups);
-    if (e <= table()) { grid[e] = 0u; }
+    if (e <= p.table) { grid[e] = 0u; }
     if (e < 40u) { atomicStore(&control[e], 0u); }
 }
 
@@ -144,10 +137,10 @@ fn scan_groups(
     let block = group_index(wid, groups);
     let e = block * 256u + lid.x;
     var value = 0u;
-    if (e <= table()) { value = grid[e]; }
+    if (e <= p.table) { value = grid[e]; }
     part[lid.x] = value;
     scan_part(lid.x);
-    if (e <= table()) { grid[e] = part[lid.x]; }
+    if (e <= p.table) { grid[e] = part[lid.x]; }
     if (lid.x == 255u) { sums[block] = part[255]; }
 }
 
@@ -155,7 +148,7 @@ fn scan_groups(
 // thread taking a run of blocks.
 @compute @workgroup_size(256)
 fn scan_sums(@builtin(local_invocation_id) lid: vec3<u32>) {
-    let blocks = (table() + 1u + 255u) / 256u;
+    let blocks = (p.table + 1u + 255u) / 256u;
     let run = (blocks + 255u) / 256u;
     let first = lid.x * run;
     var total = 0u;
@@ -174,7 +167,7 @@ fn scan_sums(@builtin(local_invocation_id) lid: vec3<u32>) {
 @compute @workgroup_size(256)
 fn scan_add(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let e = thread(id, groups);
-    if (e <= table()) { grid[e] += sums[e / 256u]; }
+    if (e <= p.table) { grid[e] += sums[e / 256u]; }
 }
 
 // Each particle to its place in its slot.
@@ -182,7 +175,7 @@ fn scan_add(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroup
 fn pair_fill(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = thread(id, groups);
     if (i >= p.n) { return; }
-    grid[table() + 1u + grid[slot(homes[i])] + ranks[i]] = i;
+    grid[p.table + 1u + grid[slot(homes[i])] + ranks[i]] = i;
 }
 
 // One Jacobi iteration (pairs.rs: `pushed`), the round's k-th: it runs only while the last
@@ -209,7 +202,7 @@ fn pair_separate(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_work
         for (var dy = -1; dy <= 1; dy++) {
             let cell = home + vec2<i32>(dx, dy);
             let h = slot(cell);
-            let entries = table() + 1u;
+            let entries = p.table + 1u;
             for (var e = grid[h]; e < grid[h + 1u]; e++) {
                 let j = grid[entries + e];
                 // Only the slot's particles of this cell: two cells that share a slot are each
@@ -292,7 +285,7 @@ fn pair_respond(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workg
         for (var dy = -1; dy <= 1; dy++) {
             let cell = home + vec2<i32>(dx, dy);
             let h = slot(cell);
-            let entries = table() + 1u;
+            let entries = p.table + 1u;
             for (var e = grid[h]; e < grid[h + 1u]; e++) {
                 let j = grid[entries + e];
                 // Only the slot's particles of this cell: two cells that share a slot are each

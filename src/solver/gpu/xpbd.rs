@@ -191,7 +191,7 @@ impl XpbdPass {
         run(pass, &self.begin.0, &self.begin.1, particles);
         for substep in 0..self.substeps {
             if let Some(c) = contact.filter(|_| substep == 0) {
-                c.record_entry(pass);
+                c.record_entry(pass, particles);
             }
             let first = usize::from(substep != 0);
             run(pass, &self.predict.0, &self.predict.1[first], particles);
@@ -203,7 +203,7 @@ impl XpbdPass {
                 }
             }
             if let Some(c) = contact {
-                c.record_substep_end(pass);
+                c.record_substep_end(pass, particles);
             }
         }
         run(pass, &self.finish.0, &self.finish.1, particles);
