@@ -108,7 +108,7 @@ fn is_false(v: &bool) -> bool {
 
 /// An obstacle as written in a scene: a shape where it stands (it does not move unless a
 /// system of the app's user moves it).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum ObstacleDef {
     /// A disc.
@@ -138,13 +138,23 @@ pub enum ObstacleDef {
         #[serde(default)]
         thickness: f64,
     },
+    /// A convex polygon of 3 to 16 corners.
+    Polygon {
+        /// The point its corners are given about (x, y), m: the centre it turns about.
+        center: (f64, f64),
+        /// Its corners (x, y) about `center`, m, in either turning order.
+        corners: Vec<(f64, f64)>,
+        /// Its rotation, rad (counter-clockwise); default 0.
+        #[serde(default)]
+        angle: f64,
+    },
 }
 
 impl ObstacleDef {
     /// The shape in its own frame and where it stands: a segment's frame is centred on its
-    /// midpoint.
-    pub fn placed(&self) -> crate::solver::Placed {
-        use crate::solver::{Placed, Shape};
+    /// midpoint. An error says what is wrong with a polygon's corners.
+    pub fn placed(&self) -> Result<crate::solver::Placed, String> {
+        use crate::solver::{Placed, Polygon, Shape};
         use glam::DVec2;
         let (shape, center, angle) = match *self {
             ObstacleDef::Circle { center, radius } => {
@@ -171,8 +181,17 @@ impl ObstacleDef {
                 };
                 (shape, mid, 0.0)
             }
+            ObstacleDef::Polygon {
+                center,
+                ref corners,
+                angle,
+            } => {
+                let corners: Vec<DVec2> = corners.iter().map(|&c| DVec2::from(c)).collect();
+                let shape = Shape::Polygon(Polygon::new(&corners)?);
+                (shape, DVec2::from(center), angle)
+            }
         };
-        Placed::at(shape, center, angle)
+        Ok(Placed::at(shape, center, angle))
     }
 
     /// The obstacle as written for a placed shape (the inverse of [`Self::placed`], with a
@@ -199,6 +218,11 @@ impl ObstacleDef {
                     thickness,
                 }
             }
+            Shape::Polygon(polygon) => ObstacleDef::Polygon {
+                center: (c.x, c.y),
+                corners: polygon.corners().iter().map(|c| (c.x, c.y)).collect(),
+                angle: p.pose.angle,
+            },
         }
     }
 }

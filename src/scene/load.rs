@@ -209,8 +209,8 @@ pub fn replace_obstacles(world: &mut World, obstacles: &[super::format::Obstacle
     for e in old {
         world.despawn(e);
     }
-    for o in obstacles {
-        let placed = o.placed();
+    // Validated before: a polygon that does not make one is not in a loaded scene.
+    for placed in obstacles.iter().filter_map(|o| o.placed().ok()) {
         world.spawn((
             Obstacle(placed.shape),
             ObstaclePose {

@@ -53,7 +53,14 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
         p.push(format!("contact.{field}: {rule}, got {v}"));
     }
     for (i, o) in scene.obstacles.iter().enumerate() {
-        if let Some((what, v, rule)) = o.placed().problem() {
+        let placed = match o.placed() {
+            Ok(placed) => placed,
+            Err(e) => {
+                p.push(format!("obstacles[{i}]: {e}"));
+                continue;
+            }
+        };
+        if let Some((what, v, rule)) = placed.problem() {
             // A bound's value is worth showing; a NaN or a zero length is the rule itself.
             let got = if v.is_finite() && what != "length" {
                 format!(", got {v}")

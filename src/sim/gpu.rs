@@ -41,6 +41,17 @@ pub fn unsupported(world: &World) -> Option<String> {
     if let Some(m) = GpuStep::unsupported(&world.resource::<Solver>().state) {
         what.push(m);
     }
+    let obstacles = world.resource::<Obstacles>();
+    if obstacles
+        .placed()
+        .iter()
+        .any(|o| matches!(o.shape, crate::solver::Shape::Polygon(_)))
+    {
+        what.push("convex polygon obstacles".to_string());
+    }
+    if obstacles.feel {
+        what.push("obstacles that feel the particles (rigid bodies)".to_string());
+    }
     let materials = (!what.is_empty())
         .then(|| format!("the GPU does not run {} yet", crate::readable::list(&what)));
     match (method, materials) {

@@ -7,6 +7,8 @@
 //! core's passes rely on. Users change the simulation through components and resources, and
 //! read it through [`Solver`]'s accessors.
 
+#[cfg(feature = "avian")]
+pub mod avian;
 pub mod components;
 #[cfg(feature = "gpu")]
 pub mod gpu;

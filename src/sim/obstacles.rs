@@ -61,6 +61,12 @@ pub struct Obstacles {
     /// The contacts the last step resolved: particle–surface (ground and obstacles) and
     /// particle pairs.
     pub contacts: crate::solver::Contacts,
+    /// Whether the steps note what each obstacle takes back from the particles' contacts
+    /// ([`crate::solver::contact::reaction`]): set by an adapter whose obstacles stand for
+    /// bodies that feel them (the `avian` feature's). Off, no pass notes anything.
+    pub feel: bool,
+    /// The impulses noted since the adapter last took them ([`Self::take_reactions`]).
+    pub(crate) reactions: crate::solver::Reactions,
 }
 
 impl Obstacles {
@@ -72,6 +78,21 @@ impl Obstacles {
     /// The entity of each, in the same order.
     pub fn entities(&self) -> &[Entity] {
         &self.entities
+    }
+
+    /// What each obstacle took from the particles since the last call, in the order of
+    /// [`Self::placed`] (empty while [`Self::feel`] is off).
+    pub fn take_reactions(&mut self) -> Vec<crate::solver::Reaction> {
+        self.reactions.take()
+    }
+
+    /// Adds an obstacle that no entity of this crate owns (an adapter's: a rigid body's
+    /// collider) for this tick's steps, after the entities' own were gathered; returns its
+    /// index. Gathered again each tick, so the adapter adds it again each tick.
+    pub fn add_for_tick(&mut self, owner: Entity, placed: Placed) -> usize {
+        self.entities.push(owner);
+        self.placed.push(placed);
+        self.placed.len() - 1
     }
 
     /// Moves the moving obstacles by their velocities over `dt` (after each step's contact

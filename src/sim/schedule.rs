@@ -460,6 +460,7 @@ fn surroundings<'a>(
         obstacles: &obstacles.placed,
         ground: params.ground,
         settings: params.contact,
+        reactions: obstacles.feel.then_some(&obstacles.reactions),
     }
 }
 
@@ -626,6 +627,9 @@ fn collide(
     );
     let o = obstacles.bypass_change_detection();
     o.contacts = contacts;
+    if o.feel {
+        o.reactions.gather(o.placed.len());
+    }
     if o.advance(dt) {
         obstacles.set_changed();
     }
@@ -672,7 +676,7 @@ fn run_steps(world: &mut World) {
 }
 
 /// Sizes the fixed tick from dt, before the fixed loop of each frame.
-fn plan_tick(
+pub(crate) fn plan_tick(
     params: Res<SimParams>,
     mut plan: ResMut<TickPlan>,
     mut time: ResMut<Time<Fixed>>,

@@ -41,9 +41,9 @@ pub mod state;
 pub mod step;
 pub(crate) mod threads;
 
-pub use contact::obstacle::{Placed, Pose, Shape};
+pub use contact::obstacle::{Placed, Polygon, Pose, Shape};
 pub use contact::pairs::{PairReport, Pairs};
-pub use contact::{ContactSettings, Surroundings};
+pub use contact::{ContactSettings, Reaction, Reactions, Surroundings};
 pub use forces::material::{GasBody, Materials, PackedMuscle, PackedPlastic};
 pub use forces::sweep::{Contact, Motion, Sweep};
 pub use method::{Integrator, Iterations};

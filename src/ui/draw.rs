@@ -336,6 +336,11 @@ fn outline(
                 gizmos.line_2d(a, b, color);
             }
         }
+        Shape::Polygon(p) => {
+            let turn = Rot2::radians(angle);
+            let corners = p.corners().iter().map(|q| c + turn * q.as_vec2());
+            gizmos.linestrip_2d(corners.clone().chain(corners.take(1)), color);
+        }
     }
 }
 

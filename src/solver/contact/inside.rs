@@ -25,7 +25,8 @@
 use super::obstacle::Placed;
 use super::outline::Outlines;
 use super::pairs::Pairs;
-use super::pass::{Surroundings, hold, place};
+use super::pass::{Surroundings, Touched, hold, place};
+use super::reaction::Reactions;
 use crate::solver::state::State;
 use glam::DVec2;
 
@@ -47,6 +48,9 @@ pub struct InSolve<'a> {
     /// acceleration): where it is heading, which tells the side of a thin segment it belongs
     /// on. The iterates cannot: one the solve already put on the surface heads away from it.
     heading: &'a [DVec2],
+    /// Where the pushes that become velocity note the obstacles' share
+    /// ([`Self::keep_out_noting`]).
+    reactions: Option<&'a Reactions>,
 }
 
 impl<'a> InSolve<'a> {
@@ -86,6 +90,7 @@ impl<'a> InSolve<'a> {
             pairs,
             outlines,
             heading,
+            reactions: around.reactions,
         })
     }
 
@@ -112,6 +117,20 @@ impl<'a> InSolve<'a> {
     /// surface it touched, if any.
     #[inline]
     pub(crate) fn keep_out(&self, i: usize, x: &mut DVec2, from: DVec2) -> Option<DVec2> {
+        self.keep_out_noting(i, x, from, 0.0)
+    }
+
+    /// [`Self::keep_out`] for a push that becomes velocity: `per_metre` (kg/s, a particle's
+    /// mass over the time its push is spread over: XPBD's m/hₛ) turns each obstacle's push
+    /// into the impulse that obstacle takes back. 0 notes nothing.
+    #[inline]
+    pub(crate) fn keep_out_noting(
+        &self,
+        i: usize,
+        x: &mut DVec2,
+        from: DVec2,
+        per_metre: f64,
+    ) -> Option<DVec2> {
         if self.obstacles.is_empty() {
             // The ground alone: one comparison for the particles far above it.
             match self.ground {
@@ -122,6 +141,10 @@ impl<'a> InSolve<'a> {
         let heading = self.heading.get(i).copied().unwrap_or(*x - from);
         let (friction, dt) = (self.friction, self.dt);
         let mut normal = None;
+        let reactions = self.reactions.filter(|_| per_metre != 0.0);
+        // Where the particle was before each obstacle's push, to note that push alone.
+        let mut mark = *x;
+        let r = self.radius;
         place(
             x,
             from,
@@ -129,9 +152,15 @@ impl<'a> InSolve<'a> {
             self.obstacles,
             self.radius,
             self.ground,
-            |x, n, depth, surface_velocity| {
-                hold(x, from, surface_velocity * dt, n, depth, friction);
+            |x, touched: Touched| {
+                let n = touched.normal;
+                let surface_shift = touched.surface_velocity * dt;
+                hold(x, from, surface_shift, n, touched.depth, friction);
                 normal = Some(n);
+                if let (Some(reactions), Some(o)) = (reactions, touched.obstacle) {
+                    reactions.note(o, *x - n * r, (*x - mark) * per_metre);
+                }
+                mark = *x;
             },
         );
         normal

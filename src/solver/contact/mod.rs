@@ -2,7 +2,8 @@
 //! and one particle's response with friction and restitution ([`obstacle`]); the contact pass
 //! that the step runs after the position update ([`collide`]), or only its velocities after a
 //! solve that kept contact itself ([`settle`]); contact between particles, with their neighbour
-//! lists ([`pairs`]); and contact inside the large-step methods' solves (`inside`).
+//! lists ([`pairs`]); contact inside the large-step methods' solves (`inside`); and the impulses
+//! the obstacles take back ([`reaction`]).
 //!
 //! It reads the state (`solver::state`), the sweep's motion (`solver::forces`) and the threads;
 //! the methods above call it (XPBD pushes pairs apart inside its substeps) and the step runs
@@ -13,5 +14,7 @@ pub mod obstacle;
 pub mod outline;
 pub mod pairs;
 mod pass;
+pub mod reaction;
 
 pub use pass::{ContactSettings, Surroundings, collide, moves_with_drift, settle};
+pub use reaction::{Reaction, Reactions};

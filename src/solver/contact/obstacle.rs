@@ -11,6 +11,10 @@
 use glam::DVec2;
 
 /// A shape in its obstacle's frame (its centre at the origin, unrotated).
+///
+/// A polygon is kept inline, so the enum is as large as its 16 corners: the passes copy a few
+/// shapes, not millions, and inline they stay `Copy` with no allocation to follow.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Shape {
     /// A disc.
@@ -32,6 +36,110 @@ pub enum Shape {
         /// The capsule's radius, m (0: a line a particle cannot cross).
         thickness: f64,
     },
+    /// A convex polygon ([`Polygon::new`]).
+    Polygon(Polygon),
+}
+
+/// A convex polygon of at most [`Polygon::MAX_VERTICES`] corners, counter-clockwise, in its
+/// obstacle's frame. Kept inline (not on the heap) so that a shape stays `Copy`, as the passes
+/// read it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Polygon {
+    corners: [DVec2; Polygon::MAX_VERTICES],
+    count: u8,
+}
+
+impl Polygon {
+    /// The most corners a polygon obstacle has (avian's boxes, hexagons and hulls of a
+    /// dozen points fit).
+    pub const MAX_VERTICES: usize = 16;
+
+    /// A convex polygon through `corners`, in either turning order; an error names what is
+    /// wrong: fewer than 3 or more than [`Self::MAX_VERTICES`] corners, a corner that is not
+    /// finite, no area, or a corner that turns the other way (not convex).
+    pub fn new(corners: &[DVec2]) -> Result<Polygon, String> {
+        let n = corners.len();
+        if !(3..=Self::MAX_VERTICES).contains(&n) {
+            return Err(format!(
+                "a convex polygon needs 3 to {} corners, not {n}",
+                Self::MAX_VERTICES
+            ));
+        }
+        if let Some(c) = corners.iter().find(|c| !c.is_finite()) {
+            return Err(format!("a polygon's corner must be finite, not {c}"));
+        }
+        let area: f64 = (0..n)
+            .map(|i| corners[i].perp_dot(corners[(i + 1) % n]))
+            .sum::<f64>()
+            * 0.5;
+        if area.abs() <= 0.0 || !area.is_finite() {
+            return Err("a polygon needs an area".into());
+        }
+        let mut p = Polygon {
+            corners: [DVec2::ZERO; Self::MAX_VERTICES],
+            count: n as u8,
+        };
+        for (i, c) in corners.iter().enumerate() {
+            // Counter-clockwise, whichever way they came.
+            p.corners[i] = if area > 0.0 { *c } else { corners[n - 1 - i] };
+        }
+        for i in 0..n {
+            let (a, b, c) = (p.corners[i], p.corners[(i + 1) % n], p.corners[(i + 2) % n]);
+            if (b - a).perp_dot(c - b) < -1e-12 * (b - a).length() * (c - b).length() {
+                return Err(format!(
+                    "a polygon must be convex: it turns back at corner {b}"
+                ));
+            }
+        }
+        Ok(p)
+    }
+
+    /// The corners, counter-clockwise.
+    pub fn corners(&self) -> &[DVec2] {
+        &self.corners[..self.count as usize]
+    }
+
+    /// The edges, each from a corner to the next.
+    fn edges(&self) -> impl Iterator<Item = (DVec2, DVec2)> + '_ {
+        let c = self.corners();
+        (0..c.len()).map(move |i| (c[i], c[(i + 1) % c.len()]))
+    }
+
+    /// Signed distance from `q` (negative inside) and the outward normal: outside, to the
+    /// nearest edge; inside, out through the nearest edge's line.
+    fn distance(&self, q: DVec2) -> (f64, DVec2) {
+        let mut inside = true;
+        let (mut deepest, mut out) = (f64::NEG_INFINITY, DVec2::Y);
+        let (mut nearest, mut toward) = (f64::INFINITY, DVec2::Y);
+        for (a, b) in self.edges() {
+            let ab = b - a;
+            let len = ab.length();
+            if len == 0.0 {
+                continue;
+            }
+            // Counter-clockwise: the outward normal is the edge turned clockwise.
+            let n = DVec2::new(ab.y, -ab.x) / len;
+            let side = (q - a).dot(n);
+            if side > 0.0 {
+                inside = false;
+            }
+            if side > deepest {
+                (deepest, out) = (side, n);
+            }
+            let t = ((q - a).dot(ab) / (len * len)).clamp(0.0, 1.0);
+            let d = q - (a + ab * t);
+            let l = d.length();
+            if l < nearest {
+                nearest = l;
+                toward = if l > 0.0 { d / l } else { n };
+            }
+        }
+        if inside {
+            (deepest, out)
+        } else {
+            (nearest, toward)
+        }
+    }
 }
 
 /// Where an obstacle is and how it moves.
@@ -134,6 +242,7 @@ impl Placed {
             Shape::Circle { radius } => radius,
             Shape::Box { half } => half.length(),
             Shape::Segment { a, b, thickness } => a.length().max(b.length()) + thickness,
+            Shape::Polygon(p) => p.corners().iter().fold(0.0, |m, c| m.max(c.length())),
         }
     }
 
@@ -178,6 +287,7 @@ impl Placed {
                 };
                 (l - thickness, n)
             }
+            Shape::Polygon(p) => p.distance(q),
         };
         (d, self.world_direction(n))
     }
@@ -291,6 +401,10 @@ impl Placed {
             Shape::Circle { radius } => ray_circle(p0, p1, DVec2::ZERO, radius + r),
             Shape::Segment { a, b, thickness } => ray_capsule(p0, p1, a, b, thickness + r),
             Shape::Box { half } => ray_rounded_box(p0, p1, half, r),
+            Shape::Polygon(p) => p
+                .edges()
+                .filter_map(|(a, b)| ray_capsule(p0, p1, a, b, r))
+                .min_by(f64::total_cmp),
         }
     }
 }
@@ -484,6 +598,39 @@ mod tests {
         );
         let (d, n) = s.distance(DVec2::new(0.3, -0.5));
         assert!((d - 0.4).abs() < 1e-12 && (n + DVec2::Y).length() < 1e-12);
+    }
+
+    /// A hexagon: its distances and normals inside and out, and a fast path into it stops on
+    /// its surface; corners given clockwise are turned round, and a dent is refused.
+    #[test]
+    fn a_convex_polygon_has_an_inside_an_outside_and_a_surface() {
+        let hexagon: Vec<DVec2> = (0..6)
+            .map(|k| DVec2::from_angle(-(k as f64) * std::f64::consts::FRAC_PI_3))
+            .collect();
+        let p = at(
+            Shape::Polygon(Polygon::new(&hexagon).unwrap()),
+            DVec2::new(1.0, 1.0),
+            0.0,
+        );
+        let apothem = 3f64.sqrt() / 2.0;
+        // Straight up from the centre: through the flat top edge.
+        let (d, n) = p.distance(DVec2::new(1.0, 1.0 + 2.0));
+        assert!((d - (2.0 - apothem)).abs() < 1e-12 && (n - DVec2::Y).length() < 1e-12);
+        let (d, n) = p.distance(DVec2::new(1.0, 1.0 + 0.5));
+        assert!((d - (0.5 - apothem)).abs() < 1e-12 && (n - DVec2::Y).length() < 1e-12);
+        // Out past a corner: the distance to the corner.
+        let (d, n) = p.distance(DVec2::new(3.0, 1.0));
+        assert!(
+            (d - 1.0).abs() < 1e-12 && (n - DVec2::X).length() < 1e-12,
+            "{d} {n}"
+        );
+        let t = p
+            .first_hit(DVec2::new(1.0, 4.0), DVec2::new(1.0, -2.0), 0.1)
+            .expect("hits");
+        let hit = DVec2::new(1.0, 4.0) + DVec2::new(0.0, -6.0) * t;
+        assert!((p.distance(hit).0 - 0.1).abs() < 1e-12, "{hit}");
+        assert!(Polygon::new(&[DVec2::ZERO, DVec2::X, DVec2::new(0.2, 0.2), DVec2::Y]).is_err());
+        assert!(Polygon::new(&[DVec2::ZERO, DVec2::X]).is_err());
     }
 
     #[test]

@@ -14,6 +14,7 @@
 //! position moves only back toward the surface, by at most the step's own travel into it.
 
 use super::obstacle::{Placed, SLOP, Surface, respond};
+use super::reaction::Reactions;
 use crate::solver::forces::sweep::Motion;
 use crate::solver::threads::Threads;
 use glam::DVec2;
@@ -82,6 +83,9 @@ pub struct Surroundings<'a> {
     pub ground: Option<f64>,
     /// The contact settings.
     pub settings: Option<ContactSettings>,
+    /// Where the particles' contacts note the impulse each obstacle takes back, when some
+    /// obstacle stands for a body that feels them ([`super::reaction`]); `None` otherwise.
+    pub reactions: Option<&'a Reactions>,
 }
 
 impl Surroundings<'_> {
@@ -163,9 +167,20 @@ pub fn collide(
     // Once a contact has put the particle back on a surface (normal n, pushed out by depth,
     // the surface moving at surface_velocity): friction on the step's sliding, then the
     // velocity's response.
-    let grip = |x: &mut DVec2, v: &mut DVec2, from, n, depth, surface_velocity: DVec2| {
+    let reactions = around.reactions;
+    let grip = |x: &mut DVec2, v: &mut DVec2, w: f64, from, touched: Touched| {
+        let Touched {
+            normal: n,
+            depth,
+            surface_velocity,
+            obstacle,
+        } = touched;
         hold(x, from, surface_velocity * dt, n, depth, surface.friction);
+        let before = *v;
         *v = respond(*v, surface_velocity, n, surface);
+        if let (Some(reactions), Some(o)) = (reactions, obstacle) {
+            reactions.note(o, *x - n * r, (*v - before) / w);
+        }
     };
     let one = |x: &mut DVec2, v: &mut DVec2, u: DVec2, w: f64| -> usize {
         if w == 0.0 {
@@ -175,15 +190,9 @@ pub fn collide(
         // that did not move it).
         let from = *x - u * dt;
         let heading = if *x != from { *x - from } else { *v };
-        place(
-            x,
-            from,
-            heading,
-            obstacles,
-            r,
-            ground,
-            |x, n, depth, surface_velocity| grip(x, v, from, n, depth, surface_velocity),
-        )
+        place(x, from, heading, obstacles, r, ground, |x, touched| {
+            grip(x, v, w, from, touched)
+        })
     };
     // The path's velocity: the drift's, or the end velocity itself (read before it changes).
     let part = |x: &mut [DVec2], v: &mut [DVec2], u: Option<&[DVec2]>, w: &[f64]| {
@@ -234,13 +243,13 @@ pub fn settle(
         around.ground(),
         around.surface(dt, gravity),
     );
-    let obstacles = around.obstacles;
+    let (obstacles, reactions) = (around.obstacles, around.reactions);
     let one = |x: DVec2, v: &mut DVec2, pre: DVec2, w: f64| -> usize {
         if w == 0.0 {
             return 0;
         }
         let mut contacts = 0;
-        let mut touching = |n: DVec2, surface_velocity: DVec2| {
+        let mut touching = |n: DVec2, surface_velocity: DVec2, obstacle: Option<usize>| {
             let (end, before) = (
                 (*v - surface_velocity).dot(n),
                 (pre - surface_velocity).dot(n),
@@ -256,21 +265,24 @@ pub fn settle(
             // keeps going.
             let normal = if before < 0.0 { bounce } else { end.max(0.0) };
             *v += n * (normal - end);
+            if let (Some(reactions), Some(o)) = (reactions, obstacle) {
+                reactions.note(o, x - n * r, n * ((normal - end) / w));
+            }
             contacts += 1;
         };
-        for o in obstacles {
+        for (k, o) in obstacles.iter().enumerate() {
             if (x - o.pose.center).length() > o.bound() + r + 2.0 * SLOP {
                 continue;
             }
             let (d, n) = o.distance(x);
             if d < r + SLOP {
-                touching(n, o.velocity_at(x));
+                touching(n, o.velocity_at(x), Some(k));
             }
         }
         if let Some(g) = ground
             && x.y < g + r + SLOP
         {
-            touching(DVec2::Y, DVec2::ZERO);
+            touching(DVec2::Y, DVec2::ZERO, None);
         }
         contacts
     };
@@ -288,9 +300,22 @@ pub fn settle(
     )
 }
 
+/// One surface a particle was put on by [`place`].
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Touched {
+    /// The surface's outward normal.
+    pub normal: DVec2,
+    /// How far the particle was pushed out, m.
+    pub depth: f64,
+    /// The surface's velocity where the particle touches it.
+    pub surface_velocity: DVec2,
+    /// The obstacle's index, `None` for the ground.
+    pub obstacle: Option<usize>,
+}
+
 /// Puts a particle that moved from `from` to `x` (heading `heading`) back out of the obstacles
 /// and the ground (`ground`: its height when this pass handles it) by the radius `r`, and calls
-/// `touched(x, normal, depth, surface_velocity)` for each surface it was put on. A path that
+/// `touched(x, surface)` for each surface it was put on. A path that
 /// crosses into an obstacle stops where it first touches and slides on along the surface for
 /// the rest of its travel, so that no step, however large, carries a particle through a thin
 /// one. Returns the contacts. The contact pass and the large-step methods' solves
@@ -302,7 +327,7 @@ pub(crate) fn place(
     obstacles: &[Placed],
     r: f64,
     ground: Option<f64>,
-    mut touched: impl FnMut(&mut DVec2, DVec2, f64, DVec2),
+    mut touched: impl FnMut(&mut DVec2, Touched),
 ) -> usize {
     let mut contacts = 0;
     // Only the obstacles the path comes near (a test of the distance to each one's centre:
@@ -324,16 +349,34 @@ pub(crate) fn place(
         let rest = step * (1.0 - t);
         let into = (-rest.dot(n)).max(0.0);
         *x = hit + rest + n * into;
-        touched(x, n, into, o.velocity_at(*x));
+        let surface_velocity = o.velocity_at(*x);
+        touched(
+            x,
+            Touched {
+                normal: n,
+                depth: into,
+                surface_velocity,
+                obstacle: Some(i),
+            },
+        );
         contacts += 1;
     }
-    for o in obstacles {
+    for (k, o) in obstacles.iter().enumerate() {
         if !near(o, *x) {
             continue;
         }
         if let Some(touch) = o.touch(*x, from, heading, r) {
             *x += touch.normal * touch.depth;
-            touched(x, touch.normal, touch.depth, o.velocity_at(*x));
+            let surface_velocity = o.velocity_at(*x);
+            touched(
+                x,
+                Touched {
+                    normal: touch.normal,
+                    depth: touch.depth,
+                    surface_velocity,
+                    obstacle: Some(k),
+                },
+            );
             contacts += 1;
         }
     }
@@ -342,7 +385,15 @@ pub(crate) fn place(
     {
         let depth = (g + r - x.y).max(0.0);
         x.y = x.y.max(g + r);
-        touched(x, DVec2::Y, depth, DVec2::ZERO);
+        touched(
+            x,
+            Touched {
+                normal: DVec2::Y,
+                depth,
+                surface_velocity: DVec2::ZERO,
+                obstacle: None,
+            },
+        );
         contacts += 1;
     }
     contacts

@@ -195,6 +195,14 @@ impl GpuStep {
                 gpu.adapter()
             )));
         }
+        if obstacles
+            .iter()
+            .any(|o| matches!(o.shape, Shape::Polygon(_)))
+        {
+            return Err(GpuError::Refused(
+                "the card's contact has circles, boxes and segments, not convex polygons".into(),
+            ));
+        }
         let n = state.particle_count();
         let dashpots = state.materials.has_dashpots();
         let (starts, others, records, link_spring) = links(state);
@@ -515,6 +523,9 @@ impl GpuStep {
                 Shape::Segment { a, b, thickness } => {
                     (2.0, a, b, thickness.max(min_thickness(self.precision)))
                 }
+                // Refused when the step was made; the obstacles changed since: the caller's
+                // check (`sim::gpu::unsupported`) takes the scene back to the CPU.
+                Shape::Polygon(_) => return,
             };
             let p = &o.pose;
             let (sin, cos) = p.angle.sin_cos();

@@ -828,7 +828,9 @@ pub fn step(
                 let particles = x.iter_mut().zip(prev.iter()).zip(w);
                 for (i, ((x, &from), &w)) in (mine.start..).zip(particles) {
                     if w != 0.0 {
-                        c.keep_out(i, x, from);
+                        // The push enters this substep's velocity, (x − p)/hₛ: the impulse
+                        // m δx/hₛ, which the obstacle takes back.
+                        c.keep_out_noting(i, x, from, inv_hs / w);
                     }
                 }
             }

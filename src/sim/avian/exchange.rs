@@ -1,0 +1,167 @@
+//! What hooke gives back to avian each tick: the contacts' impulses and the attachments'
+//! pulls, onto the dynamic bodies through avian's [`Forces`]; and the attached particles put at
+//! their bodies' points before the step.
+
+use super::Coupling;
+use crate::sim::components::{Kinematic, Position as ParticlePosition, Velocity};
+use crate::sim::obstacles::Obstacles;
+use crate::sim::params::SimParams;
+use crate::sim::solver::Solver;
+use avian2d::prelude::*;
+use bevy::math::DVec2;
+use bevy::prelude::*;
+
+/// Ties a particle (the entity this is on) to a point of a rigid body, two ways: each step the
+/// particle starts at the point with the point's velocity, held kinematic (its mass is then the
+/// body's to carry), and the body feels the pull of the particle's springs, at the point.
+///
+/// ```
+/// # use bevy::math::{DVec2, Vec2};
+/// # use bevy::prelude::*;
+/// # use hooke::sim::{Particle, Position};
+/// # use hooke::sim::avian::Attachment;
+/// # let mut world = World::new();
+/// # let crate_body = world.spawn_empty().id();
+/// // The rope's last particle holds the crate by the middle of its top side.
+/// world.spawn((
+///     Particle,
+///     Position(DVec2::new(0.5, 0.4)),
+///     Attachment { body: crate_body, anchor: Vec2::new(0.0, 0.1) },
+/// ));
+/// ```
+#[derive(Component, Debug, Clone, Copy, PartialEq)]
+#[require(Kinematic)]
+pub struct Attachment {
+    /// The rigid body's entity.
+    pub body: Entity,
+    /// The point, in the body's own frame (about its [`Position`], unrotated), m.
+    pub anchor: Vec2,
+}
+
+/// The world point and velocity of `anchor` on a body at `at`, turned by `turn`, moving with
+/// `v` and `w` about its centre of mass `com`.
+fn point_of(
+    at: &Position,
+    turn: &Rotation,
+    anchor: Vec2,
+    v: DVec2,
+    w: f64,
+    com: DVec2,
+) -> (DVec2, DVec2) {
+    let p = (at.0 + *turn * anchor).as_dvec2();
+    (p, v + w * (p - com).perp())
+}
+
+type BodyMotion<'a> = (
+    &'a Position,
+    &'a Rotation,
+    Option<&'a LinearVelocity>,
+    Option<&'a AngularVelocity>,
+    Option<&'a ComputedCenterOfMass>,
+);
+
+/// The body's centre of mass in the world.
+fn centre_of_mass(at: &Position, turn: &Rotation, com: Option<&ComputedCenterOfMass>) -> DVec2 {
+    (at.0 + *turn * com.map_or(Vec2::ZERO, |c| c.0)).as_dvec2()
+}
+
+/// Puts each attached particle at its body's point, moving with it.
+pub(super) fn follow(
+    mut particles: Query<(&Attachment, &mut ParticlePosition, &mut Velocity)>,
+    bodies: Query<BodyMotion>,
+) {
+    for (a, mut x, mut u) in &mut particles {
+        let Ok((at, turn, v, w, com)) = bodies.get(a.body) else {
+            continue;
+        };
+        let (v, w) = (
+            v.map_or(DVec2::ZERO, |v| v.0.as_dvec2()),
+            w.map_or(0.0, |w| w.0 as f64),
+        );
+        let (p, pv) = point_of(at, turn, a.anchor, v, w, centre_of_mass(at, turn, com));
+        if x.0 != p {
+            x.0 = p;
+        }
+        if u.0 != pv {
+            u.0 = pv;
+        }
+    }
+}
+
+/// The pull of particle `i`'s springs at the state's positions, N: each stretched spring pulls
+/// toward its other end.
+fn pull_on(solver: &Solver, i: u32) -> DVec2 {
+    let x = solver.x();
+    let mut f = DVec2::ZERO;
+    for s in solver.springs() {
+        let other = if s.a == i {
+            s.b
+        } else if s.b == i {
+            s.a
+        } else {
+            continue;
+        };
+        let d = x[other as usize] - x[i as usize];
+        let l = d.length();
+        if l > 0.0 {
+            f += d * (s.k * (l - s.rest) / l);
+        }
+    }
+    f
+}
+
+/// Gives each dynamic body minus the impulses its colliders gave the particles this tick, and
+/// its attachments' pulls over the tick.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn push(
+    mut obstacles: ResMut<Obstacles>,
+    mut coupling: ResMut<Coupling>,
+    solver: Res<Solver>,
+    params: Res<SimParams>,
+    attached: Query<(Entity, &Attachment)>,
+    owners: Query<&ColliderOf>,
+    kinds: Query<&RigidBody>,
+    mut forces: Query<(Forces, &ComputedCenterOfMass)>,
+) {
+    coupling.impulses.clear();
+    let reactions = obstacles.bypass_change_detection().take_reactions();
+    let mut totals: Vec<(Entity, DVec2, f64)> = vec![];
+    let mut add =
+        |body: Entity, impulse: DVec2, moment: f64| match totals.iter_mut().find(|t| t.0 == body) {
+            Some(t) => {
+                t.1 += impulse;
+                t.2 += moment;
+            }
+            None => totals.push((body, impulse, moment)),
+        };
+    for (owner, r) in obstacles.entities().iter().zip(&reactions) {
+        if r.contacts == 0 {
+            continue;
+        }
+        let body = owners.get(*owner).map_or(*owner, |o| o.body);
+        add(body, r.impulse, r.moment);
+    }
+    if !attached.is_empty() {
+        let entities = solver.entities();
+        for (e, a) in &attached {
+            let Some(i) = entities.iter().position(|p| *p == e) else {
+                continue;
+            };
+            let at = solver.x()[i];
+            let j = pull_on(&solver, i as u32) * params.dt;
+            add(a.body, j, at.perp_dot(j));
+        }
+    }
+    for (body, impulse, moment) in totals {
+        if !kinds.get(body).is_ok_and(|k| k.is_dynamic()) {
+            continue;
+        }
+        let Ok((mut f, com)) = forces.get_mut(body) else {
+            continue;
+        };
+        let c = centre_of_mass(f.position(), f.rotation(), Some(com));
+        f.apply_linear_impulse(impulse.as_vec2());
+        f.apply_angular_impulse((moment - c.perp_dot(impulse)) as f32);
+        coupling.impulses.push((body, impulse.as_vec2()));
+    }
+}

@@ -1,0 +1,149 @@
+//! hooke in an avian2d world (feature `avian`): avian's colliders act on the particles as
+//! obstacles, its dynamic bodies take back the impulse of every particle contact, and
+//! [`Attachment`]s tie particles to points of bodies, two ways.
+//!
+//! # One clock
+//!
+//! hooke's step is avian's step: each fixed tick runs one hooke step of
+//! [`SimParams::dt`](crate::sim::SimParams::dt) in `FixedUpdate` and then one avian step of the
+//! same length in `FixedPostUpdate` (avian's default schedule), so after N ticks both have taken
+//! N steps. The plugin sets the tick to dt ([`TickPlan::target_tick_seconds`]), pauses avian's
+//! time whenever hooke is paused or stopped, and copies avian's [`Gravity`] into hooke's
+//! gravity: avian's is the one source.
+//!
+//! # What crosses each tick, in order ([`AvianSystems`])
+//!
+//! 1. `FixedUpdate`, before [`PhysicsSystems::Prepare`]: [`AvianSystems::Follow`]. Each
+//!    attached particle is put at its body's point, with that point's velocity, held
+//!    kinematic for the step.
+//! 2. In [`PhysicsSystems::Prepare`], after hooke's own obstacles are gathered:
+//!    [`AvianSystems::Colliders`]. One query of avian's broad phase (its collider tree) over
+//!    the particles' bounds, grown by a step's travel, names the colliders near them; each is
+//!    added to the tick's obstacles at its body's pose and velocity.
+//! 3. hooke's step ([`PhysicsSystems::Step`]) collides the particles with them under the
+//!    chosen integrator, and notes the impulse each contact gives
+//!    ([`crate::solver::contact::reaction`]).
+//! 4. After [`PhysicsSystems::Writeback`]: [`AvianSystems::Push`]. Each dynamic body takes
+//!    minus the impulses its colliders gave, at their contact points (linear and angular), and
+//!    each attachment's pull, through avian's [`Forces`]. Nothing writes avian's positions.
+//! 5. avian steps in `FixedPostUpdate`, with the impulses in its bodies' velocities.
+//!
+//! `docs/library.md` has the whole account: what is supported under which integrator, and what
+//! the feature costs to build.
+
+mod colliders;
+mod exchange;
+
+pub use colliders::{ShapeProblem, obstacle_shapes};
+pub use exchange::Attachment;
+
+use super::obstacles::Obstacles;
+use super::params::{SimParams, SimStatus, TickPlan};
+use super::schedule::PhysicsSystems;
+use avian2d::prelude::*;
+use bevy::prelude::*;
+
+/// The coupling's sets in `FixedUpdate`, in the order of the module docs.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum AvianSystems {
+    /// Attached particles follow their bodies' points (before hooke's
+    /// [`PhysicsSystems::Prepare`]).
+    Follow,
+    /// avian's colliders near the particles become this tick's obstacles (in
+    /// [`PhysicsSystems::Prepare`]).
+    Colliders,
+    /// The dynamic bodies take the contacts' impulses and the attachments' pulls (after
+    /// [`PhysicsSystems::Writeback`]).
+    Push,
+}
+
+/// Couples hooke ([`crate::SimPlugin`]) with avian2d (`PhysicsPlugins`), which the app adds
+/// itself, in avian's default schedule (`FixedPostUpdate`).
+///
+/// ```
+/// use avian2d::prelude::*;
+/// use bevy::prelude::*;
+/// let mut app = hooke::headless_app();
+/// app.add_plugins((
+///     PhysicsPlugins::default(),
+///     hooke::sim::avian::HookeAvianPlugin,
+/// ));
+/// // A dynamic box for the particles to push.
+/// app.world_mut().spawn((RigidBody::Dynamic, Collider::rectangle(0.2, 0.2)));
+/// ```
+pub struct HookeAvianPlugin;
+
+impl Plugin for HookeAvianPlugin {
+    fn build(&self, app: &mut App) {
+        app.init_resource::<Coupling>()
+            .configure_sets(
+                FixedUpdate,
+                (
+                    AvianSystems::Follow.before(PhysicsSystems::Prepare),
+                    AvianSystems::Colliders.in_set(PhysicsSystems::Prepare),
+                    AvianSystems::Push.after(PhysicsSystems::Writeback),
+                ),
+            )
+            .add_systems(
+                RunFixedMainLoop,
+                one_clock
+                    .in_set(bevy::app::RunFixedMainLoopSystems::BeforeFixedMainLoop)
+                    .before(super::schedule::plan_tick),
+            )
+            .add_systems(
+                FixedUpdate,
+                (
+                    (one_gravity, exchange::follow).in_set(AvianSystems::Follow),
+                    colliders::gather
+                        .in_set(AvianSystems::Colliders)
+                        .after(super::obstacles::gather_obstacles),
+                    exchange::push.in_set(AvianSystems::Push),
+                ),
+            );
+        #[cfg(feature = "gpu")]
+        app.configure_sets(
+            FixedUpdate,
+            AvianSystems::Colliders.before(super::gpu::decide_device),
+        );
+        // The step notes what the obstacles take back only while this plugin is in.
+        app.world_mut().resource_mut::<Obstacles>().feel = true;
+    }
+}
+
+/// What the coupling found and did on the last tick, for a status line or a test.
+#[derive(Resource, Debug, Default, Clone)]
+pub struct Coupling {
+    /// avian's colliders that acted on the particles as obstacles.
+    pub colliders: usize,
+    /// Colliders whose shape hooke cannot take (a height field, a triangle mesh), each named
+    /// once with why; they do not touch the particles.
+    pub skipped: Vec<(Entity, ShapeProblem)>,
+    /// The sum of the impulses the particles gave each dynamic body on the last tick, N·s.
+    pub impulses: Vec<(Entity, Vec2)>,
+}
+
+/// One clock: a tick is one step of hooke's dt, avian's time runs only while hooke steps.
+fn one_clock(
+    params: Res<SimParams>,
+    status: Res<SimStatus>,
+    mut plan: ResMut<TickPlan>,
+    mut physics: ResMut<Time<Physics>>,
+) {
+    if params.dt.is_finite() && params.dt > 0.0 && plan.target_tick_seconds != params.dt {
+        plan.target_tick_seconds = params.dt;
+    }
+    let running = !params.paused && *status == SimStatus::Running;
+    if running && physics.is_paused() {
+        physics.unpause();
+    } else if !running && !physics.is_paused() {
+        physics.pause();
+    }
+}
+
+/// One gravity: avian's, copied into hooke's parameters when it differs.
+fn one_gravity(gravity: Res<Gravity>, mut params: ResMut<SimParams>) {
+    let g = gravity.0.as_dvec2();
+    if params.gravity != g {
+        params.gravity = g;
+    }
+}

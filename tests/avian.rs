@@ -1,0 +1,503 @@
+//! hooke in an avian2d world (feature `avian`): momentum exchanged in a head-on impact, the
+//! spin of an off-centre hit, a crate hanging on a rope, a box resting on a trampoline, avian's
+//! circle against hooke's own, a heavy box on a light cloth, and the two clocks in lockstep.
+
+#![cfg(feature = "avian")]
+
+use avian2d::prelude::*;
+use bevy::math::DVec2;
+use bevy::prelude::*;
+use bevy::time::TimeUpdateStrategy;
+use hooke::sim::avian::{Attachment, Coupling, HookeAvianPlugin};
+use hooke::sim::{
+    ContactSettings, Dashpot, Integrator, Mass as ParticleMass, Obstacle, ObstaclePose, Particle,
+    Pinned, Position as ParticlePosition, SimClock, SimParams, Solver, Spring,
+    Velocity as ParticleVelocity,
+};
+use std::time::Duration;
+
+/// A headless app with avian and the coupling, stepping `dt` a frame, running.
+fn coupled(integrator: Integrator, dt: f64, gravity: Vec2) -> App {
+    let mut app = hooke::headless_app();
+    app.add_plugins((
+        bevy::transform::TransformPlugin,
+        PhysicsPlugins::default(),
+        HookeAvianPlugin,
+    ));
+    frame(&mut app, integrator, dt);
+    app.insert_resource(Gravity(gravity));
+    // avian readies some of its resources in its plugins' `finish`, which `App::run` calls and
+    // a hand-stepped app must call itself.
+    app.finish();
+    app.cleanup();
+    app
+}
+
+/// hooke's settings for these tests: no air damping, no ground, contact of radius 5 mm
+/// without friction or bounce, one step of `dt` a frame.
+fn frame(app: &mut App, integrator: Integrator, dt: f64) {
+    app.insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f64(
+        dt,
+    )));
+    let mut p = app.world_mut().resource_mut::<SimParams>();
+    p.integrator = integrator;
+    p.dt = dt;
+    p.damping = 0.0;
+    p.ground = None;
+    p.paused = false;
+    p.contact = Some(ContactSettings {
+        radius: 0.005,
+        ..ContactSettings::default()
+    });
+}
+
+fn run(app: &mut App, frames: usize) {
+    for _ in 0..frames {
+        app.update();
+    }
+}
+
+/// A soft ball of `mass` kg: a centre and a ring of 16 particles, rim and spokes with
+/// dashpots, moving at `v`.
+fn soft_ball(world: &mut World, centre: DVec2, radius: f64, mass: f64, v: DVec2) -> Vec<Entity> {
+    let n = 16;
+    let m = mass / (n + 1) as f64;
+    let mut spawn = |at: DVec2| {
+        world
+            .spawn((
+                Particle,
+                ParticlePosition(at),
+                ParticleVelocity(v),
+                ParticleMass(m),
+            ))
+            .id()
+    };
+    let hub = spawn(centre);
+    let rim: Vec<Entity> = (0..n)
+        .map(|k| {
+            spawn(centre + DVec2::from_angle(k as f64 * std::f64::consts::TAU / n as f64) * radius)
+        })
+        .collect();
+    let side = 2.0 * radius * (std::f64::consts::PI / n as f64).sin();
+    for k in 0..n {
+        let (a, b) = (rim[k], rim[(k + 1) % n]);
+        world.spawn((Spring::new(a, b, side, 2e3), Dashpot(80.0)));
+        world.spawn((Spring::new(hub, a, radius, 2e3), Dashpot(80.0)));
+    }
+    let mut all = vec![hub];
+    all.extend(rim);
+    all
+}
+
+/// The particles' total momentum, kg·m/s.
+fn particle_momentum(app: &App) -> DVec2 {
+    let s = app.world().resource::<Solver>();
+    s.v().iter().zip(s.mass()).map(|(v, m)| *v * *m).sum()
+}
+
+fn body_velocity(app: &App, body: Entity) -> DVec2 {
+    app.world()
+        .get::<LinearVelocity>(body)
+        .unwrap()
+        .0
+        .as_dvec2()
+}
+
+/// A 1 kg soft ball, and a 1 kg particle, hit a 1 kg box head-on with gravity off: the
+/// momentum is kept to 1e-5. Under symplectic Euler at 1e-4 s (the contact pass) and XPBD at
+/// 1/120 s (its substeps).
+#[test]
+fn a_head_on_impact_keeps_the_momentum() {
+    for (integrator, dt, frames) in [
+        (Integrator::SymplecticEuler, 1e-4, 8000),
+        (Integrator::Xpbd, 1.0 / 120.0, 96),
+    ] {
+        for ball in [true, false] {
+            let mut app = coupled(integrator, dt, Vec2::ZERO);
+            let w = app.world_mut();
+            if ball {
+                soft_ball(w, DVec2::new(0.0, 0.0), 0.1, 1.0, DVec2::new(1.0, 0.0));
+            } else {
+                w.spawn((
+                    Particle,
+                    ParticlePosition(DVec2::new(0.1, 0.0)),
+                    ParticleVelocity(DVec2::new(1.0, 0.0)),
+                    ParticleMass(1.0),
+                ));
+            }
+            let body = w
+                .spawn((
+                    RigidBody::Dynamic,
+                    Collider::rectangle(0.2, 0.2),
+                    Mass(1.0),
+                    Position(Vec2::new(0.25, 0.0)),
+                ))
+                .id();
+            run(&mut app, 2);
+            let before = particle_momentum(&app) + body_velocity(&app, body);
+            assert!((before.x - 1.0).abs() < 1e-9, "{before}");
+            let mut touched = false;
+            for _ in 0..frames {
+                app.update();
+                touched |= !app.world().resource::<Coupling>().impulses.is_empty();
+            }
+            assert!(touched, "{integrator}: the ball never reached the box");
+            let after = particle_momentum(&app) + body_velocity(&app, body);
+            let drift = (after - before).length() / before.length();
+            let (box_v, ball_v) = (body_velocity(&app, body), particle_momentum(&app));
+            println!(
+                "{integrator}, ball {ball}: momentum drift {drift:.1e}, box {box_v}, ball {ball_v}"
+            );
+            assert!(drift < 1e-5, "{integrator}: momentum {before} -> {after}");
+        }
+    }
+}
+
+/// A particle hits a box off its centre: the box spins at (r × J)/I, J the impulse the particle
+/// lost and r its arm from the box's centre of mass.
+#[test]
+fn an_off_centre_hit_spins_the_box() {
+    let mut app = coupled(Integrator::SymplecticEuler, 1e-4, Vec2::ZERO);
+    let w = app.world_mut();
+    let v0 = DVec2::new(0.0, -2.0);
+    let p = w
+        .spawn((
+            Particle,
+            ParticlePosition(DVec2::new(0.15, 0.2)),
+            ParticleVelocity(v0),
+            ParticleMass(0.1),
+        ))
+        .id();
+    let body = w
+        .spawn((RigidBody::Dynamic, Collider::rectangle(0.4, 0.2), Mass(1.0)))
+        .id();
+    run(&mut app, 2);
+    let inertia = app
+        .world()
+        .get::<ComputedAngularInertia>(body)
+        .unwrap()
+        .value() as f64;
+    let mut hit = None;
+    for _ in 0..2000 {
+        let before = app.world().get::<ParticlePosition>(p).unwrap().0;
+        app.update();
+        if hit.is_none() && !app.world().resource::<Coupling>().impulses.is_empty() {
+            hit = Some(before);
+        }
+    }
+    let at = hit.expect("the particle hits the box");
+    let v = app.world().get::<ParticleVelocity>(p).unwrap().0;
+    let j = -(v - v0) * 0.1;
+    // The arm to the contact point on the box's top face, from the centre of mass at rest.
+    let r = DVec2::new(at.x, 0.1);
+    let expected = r.perp_dot(j) / inertia;
+    let spin = app.world().get::<AngularVelocity>(body).unwrap().0 as f64;
+    println!("spin {spin} rad/s, expected {expected}, impulse {j}");
+    assert!(j.y < -0.1, "the particle gave the box an impulse: {j}");
+    assert!(
+        ((spin - expected) / expected).abs() < 0.02,
+        "spin {spin} against (r × J)/I = {expected}"
+    );
+}
+
+/// A crate of mass M hangs still on a rope of n particles from a pin: spring j stretches by
+/// (M + (n − j) m) g / k.
+#[test]
+fn a_crate_hangs_on_a_rope() {
+    let (n, m, k, big_m, l) = (10usize, 0.02, 2e3, 1.0, 0.05);
+    let mut app = coupled(
+        Integrator::ImplicitEuler,
+        1.0 / 120.0,
+        Vec2::new(0.0, -9.81),
+    );
+    app.world_mut().resource_mut::<SimParams>().damping = 2.0;
+    let w = app.world_mut();
+    let crate_top = 1.0 - n as f64 * l;
+    let body = w
+        .spawn((
+            RigidBody::Dynamic,
+            Collider::rectangle(0.1, 0.1),
+            Mass(big_m as f32),
+            LinearDamping(1.0),
+            AngularDamping(1.0),
+            Position(Vec2::new(0.5, crate_top as f32 - 0.05)),
+        ))
+        .id();
+    let rope: Vec<Entity> = (0..=n)
+        .map(|j| {
+            let at = DVec2::new(0.5, 1.0 - j as f64 * l);
+            let mut e = w.spawn((Particle, ParticlePosition(at), ParticleMass(m)));
+            if j == 0 {
+                e.insert(Pinned);
+            }
+            if j == n {
+                e.insert(Attachment {
+                    body,
+                    anchor: Vec2::new(0.0, 0.05),
+                });
+            }
+            e.id()
+        })
+        .collect();
+    for j in 1..=n {
+        w.spawn(Spring::new(rope[j - 1], rope[j], l, k));
+    }
+    run(&mut app, 1100);
+    let before = app.world().get::<Position>(body).unwrap().0;
+    run(&mut app, 100);
+    let s = app.world().resource::<Solver>();
+    let g = 9.81f32 as f64;
+    for j in 1..=n {
+        let stretch = (s.x()[j] - s.x()[j - 1]).length() - l;
+        let expected = (big_m + (n - j) as f64 * m) * g / k;
+        assert!(
+            ((stretch - expected) / expected).abs() < 0.01,
+            "spring {j}: stretch {stretch}, expected {expected}"
+        );
+    }
+    // Still: avian's stored velocity at rest is not 0 (the pull comes as an impulse at the
+    // step's start, gravity over its substeps), so its place is what is checked.
+    let moved = app.world().get::<Position>(body).unwrap().0 - before;
+    assert!(
+        moved.length() < 1e-5,
+        "the crate still moves: {moved} in 100 steps"
+    );
+}
+
+/// A pinned strip of cloth, `columns` wide and two rows deep, its ends pinned, at height `y`.
+fn trampoline(world: &mut World, columns: usize, y: f64, mass: f64, k: f64) -> Vec<Entity> {
+    let (width, rows) = (1.0, 2);
+    let dx = width / (columns - 1) as f64;
+    let mut grid = vec![];
+    for r in 0..rows {
+        for c in 0..columns {
+            let at = DVec2::new(c as f64 * dx, y - r as f64 * dx);
+            let mut e = world.spawn((Particle, ParticlePosition(at), ParticleMass(mass)));
+            if c == 0 || c == columns - 1 {
+                e.insert(Pinned);
+            }
+            grid.push(e.id());
+        }
+    }
+    let id = |r: usize, c: usize| grid[r * columns + c];
+    for r in 0..rows {
+        for c in 0..columns {
+            if c + 1 < columns {
+                world.spawn(Spring::new(id(r, c), id(r, c + 1), dx, k));
+            }
+            if r + 1 < rows {
+                world.spawn(Spring::new(id(r, c), id(r + 1, c), dx, k));
+                if c + 1 < columns {
+                    let d = dx * std::f64::consts::SQRT_2;
+                    world.spawn(Spring::new(id(r, c), id(r + 1, c + 1), d, k));
+                    world.spawn(Spring::new(id(r + 1, c), id(r, c + 1), d, k));
+                }
+            }
+        }
+    }
+    grid
+}
+
+/// A box dropped on a pinned cloth comes to rest on it, and the cloth carries its weight: the
+/// contacts' impulses over a second sum to M g.
+#[test]
+fn a_trampoline_carries_a_box() {
+    let mut app = coupled(Integrator::Xpbd, 1.0 / 60.0, Vec2::new(0.0, -9.81));
+    app.world_mut().resource_mut::<SimParams>().damping = 5.0;
+    let w = app.world_mut();
+    trampoline(w, 41, 0.5, 0.01, 1e4);
+    let big_m = 0.5;
+    let body = w
+        .spawn((
+            RigidBody::Dynamic,
+            Collider::rectangle(0.2, 0.1),
+            Mass(big_m),
+            LinearDamping(2.0),
+            AngularDamping(2.0),
+            Position(Vec2::new(0.5, 0.62)),
+        ))
+        .id();
+    run(&mut app, 600);
+    let mut total = Vec2::ZERO;
+    for _ in 0..60 {
+        app.update();
+        for (e, j) in &app.world().resource::<Coupling>().impulses {
+            if *e == body {
+                total += *j;
+            }
+        }
+    }
+    let weight = big_m as f64 * 9.81f32 as f64;
+    let carried = total.y as f64;
+    println!("carried {carried} N·s over 1 s against M g = {weight}");
+    assert!(
+        ((carried - weight) / weight).abs() < 0.01,
+        "carried {carried}, weight {weight}"
+    );
+    let y = app.world().get::<Position>(body).unwrap().0.y;
+    assert!(y < 0.6 && y > 0.3, "the box rests on the cloth: y = {y}");
+}
+
+/// A heavy box (10 kg) on a light cloth (0.8 g a particle): the cloth sags and holds it, and
+/// nothing goes non-finite or through.
+#[test]
+#[ignore = "not met yet: the light cloth cannot stop the heavy box (see docs/library.md)"]
+fn a_heavy_box_on_a_light_cloth_stays_above_it() {
+    let mut app = coupled(Integrator::Xpbd, 1.0 / 60.0, Vec2::new(0.0, -9.81));
+    app.world_mut().resource_mut::<SimParams>().damping = 5.0;
+    let w = app.world_mut();
+    trampoline(w, 21, 0.5, 0.0008, 1e4);
+    let body = w
+        .spawn((
+            RigidBody::Dynamic,
+            Collider::rectangle(0.2, 0.1),
+            Mass(10.0),
+            Position(Vec2::new(0.5, 0.6)),
+        ))
+        .id();
+    for frame in 0..300 {
+        app.update();
+        let s = app.world().resource::<Solver>();
+        let bottom = app.world().get::<Position>(body).unwrap().0.y as f64 - 0.05;
+        assert!(bottom.is_finite() && s.x().iter().all(|p| p.is_finite()));
+        // The cloth's particles under the box stay below its bottom face.
+        let x = app.world().get::<Position>(body).unwrap().0.x as f64;
+        for p in s.x() {
+            if (p.x - x).abs() < 0.08 {
+                assert!(
+                    p.y < bottom + 0.001,
+                    "frame {frame}: a particle at {p} is inside the box (bottom {bottom}), box moving {}",
+                    body_velocity(&app, body)
+                );
+            }
+        }
+    }
+}
+
+/// A static avian circle moves a falling cloth exactly as hooke's own circle of the same size
+/// and place does, to avian's f32 pose.
+#[test]
+fn an_avian_circle_is_a_native_circle() {
+    let build = |app: &mut App| {
+        let w = app.world_mut();
+        for r in 0..6 {
+            for c in 0..6 {
+                let at = DVec2::new(0.4 + 0.04 * c as f64, 0.5 - 0.04 * r as f64);
+                w.spawn((Particle, ParticlePosition(at)));
+            }
+        }
+    };
+    let dt = 1.0 / 120.0;
+    let mut avian = coupled(Integrator::Xpbd, dt, Vec2::new(0.0, -9.81));
+    build(&mut avian);
+    avian.world_mut().spawn((
+        RigidBody::Static,
+        Collider::circle(0.1),
+        Position(Vec2::new(0.5, 0.2)),
+    ));
+    let mut native = hooke::headless_app();
+    frame(&mut native, Integrator::Xpbd, dt);
+    native.world_mut().resource_mut::<SimParams>().gravity = DVec2::new(0.0, -9.81);
+    native
+        .world_mut()
+        .resource_mut::<hooke::sim::TickPlan>()
+        .target_tick_seconds = dt;
+    build(&mut native);
+    native.world_mut().spawn((
+        Obstacle(hooke::solver::Shape::Circle { radius: 0.1 }),
+        ObstaclePose {
+            center: DVec2::new(0.5, 0.2),
+            angle: 0.0,
+        },
+    ));
+    let (mut worst, mut touching): (f64, usize) = (0.0, 0);
+    for _ in 0..120 {
+        avian.update();
+        native.update();
+        let (a, b) = (
+            avian.world().resource::<Solver>(),
+            native.world().resource::<Solver>(),
+        );
+        for (p, q) in a.x().iter().zip(b.x()) {
+            worst = worst.max((*p - *q).length());
+        }
+        let contacts = avian
+            .world()
+            .resource::<hooke::sim::Obstacles>()
+            .contacts
+            .surfaces;
+        touching = touching.max(contacts);
+    }
+    println!("largest difference {worst:.1e} m, {touching} contacts");
+    assert!(touching > 0, "the cloth reached the circle");
+    assert!(worst < 1e-6, "avian's circle and hooke's part by {worst} m");
+}
+
+/// hooke's steps and avian's are the same count after any number of frames, and pausing hooke
+/// pauses both.
+#[test]
+fn the_two_clocks_step_together() {
+    let mut app = coupled(Integrator::Xpbd, 1.0 / 60.0, Vec2::new(0.0, -9.81));
+    let w = app.world_mut();
+    soft_ball(w, DVec2::new(0.5, 0.8), 0.05, 0.2, DVec2::ZERO);
+    w.spawn((
+        RigidBody::Dynamic,
+        Collider::circle(0.05),
+        Position(Vec2::new(0.5, 0.5)),
+    ));
+    let count = |app: &App| {
+        (
+            app.world().resource::<SimClock>().steps,
+            // avian's clock advances by its step only when it steps.
+            (app.world().resource::<Time<Physics>>().elapsed_secs_f64() * 60.0).round() as u64,
+        )
+    };
+    run(&mut app, 37);
+    let (hooke_steps, avian_steps) = count(&app);
+    assert!(hooke_steps > 30, "{hooke_steps}");
+    assert_eq!(hooke_steps, avian_steps);
+    app.world_mut().resource_mut::<SimParams>().paused = true;
+    run(&mut app, 10);
+    assert_eq!(
+        count(&app),
+        (hooke_steps, avian_steps),
+        "paused, neither steps"
+    );
+    app.world_mut().resource_mut::<SimParams>().paused = false;
+    run(&mut app, 23);
+    let (h, a) = count(&app);
+    assert_eq!(h, a);
+    assert!(h > hooke_steps + 15);
+}
+
+/// With restitution 0, a 1 kg particle and the 1 kg box it hits leave together at half its
+/// speed.
+#[test]
+#[ignore = "not met yet: within a step the body is as heavy as a wall (docs/library.md)"]
+fn an_inelastic_impact_leaves_together() {
+    let mut app = coupled(Integrator::SymplecticEuler, 1e-4, Vec2::ZERO);
+    let w = app.world_mut();
+    let p = w
+        .spawn((
+            Particle,
+            ParticlePosition(DVec2::new(0.1, 0.0)),
+            ParticleVelocity(DVec2::new(1.0, 0.0)),
+            ParticleMass(1.0),
+        ))
+        .id();
+    let body = w
+        .spawn((
+            RigidBody::Dynamic,
+            Collider::rectangle(0.2, 0.2),
+            Mass(1.0),
+            Position(Vec2::new(0.25, 0.0)),
+        ))
+        .id();
+    run(&mut app, 3000);
+    let v = app.world().get::<ParticleVelocity>(p).unwrap().0.x;
+    let u = body_velocity(&app, body).x;
+    assert!(
+        (v - 0.5).abs() < 0.01 && (u - 0.5).abs() < 0.01,
+        "particle {v} m/s, box {u} m/s"
+    );
+}
