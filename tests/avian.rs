@@ -89,6 +89,30 @@ fn soft_ball(world: &mut World, centre: DVec2, radius: f64, mass: f64, v: DVec2)
     all
 }
 
+/// A 1 kg particle at (0.1, 0) moving at 1 m/s toward [`one_kg_box`].
+fn one_kg_particle(world: &mut World) -> Entity {
+    world
+        .spawn((
+            Particle,
+            ParticlePosition(DVec2::new(0.1, 0.0)),
+            ParticleVelocity(DVec2::new(1.0, 0.0)),
+            ParticleMass(1.0),
+        ))
+        .id()
+}
+
+/// A dynamic 0.2 m square box of 1 kg at (0.25, 0), at rest.
+fn one_kg_box(world: &mut World) -> Entity {
+    world
+        .spawn((
+            RigidBody::Dynamic,
+            Collider::rectangle(0.2, 0.2),
+            Mass(1.0),
+            Position(Vec2::new(0.25, 0.0)),
+        ))
+        .id()
+}
+
 /// The particles' total momentum, kg·m/s.
 fn particle_momentum(app: &App) -> DVec2 {
     let s = app.world().resource::<Solver>();
@@ -118,21 +142,9 @@ fn a_head_on_impact_keeps_the_momentum() {
             if ball {
                 soft_ball(w, DVec2::new(0.0, 0.0), 0.1, 1.0, DVec2::new(1.0, 0.0));
             } else {
-                w.spawn((
-                    Particle,
-                    ParticlePosition(DVec2::new(0.1, 0.0)),
-                    ParticleVelocity(DVec2::new(1.0, 0.0)),
-                    ParticleMass(1.0),
-                ));
+                one_kg_particle(w);
             }
-            let body = w
-                .spawn((
-                    RigidBody::Dynamic,
-                    Collider::rectangle(0.2, 0.2),
-                    Mass(1.0),
-                    Position(Vec2::new(0.25, 0.0)),
-                ))
-                .id();
+            let body = one_kg_box(w);
             run(&mut app, 2);
             let before = particle_momentum(&app) + body_velocity(&app, body);
             assert!((before.x - 1.0).abs() < 1e-9, "{before}");
@@ -477,22 +489,8 @@ fn the_two_clocks_step_together() {
 fn an_inelastic_impact_leaves_together() {
     let mut app = coupled(Integrator::SymplecticEuler, 1e-4, Vec2::ZERO);
     let w = app.world_mut();
-    let p = w
-        .spawn((
-            Particle,
-            ParticlePosition(DVec2::new(0.1, 0.0)),
-            ParticleVelocity(DVec2::new(1.0, 0.0)),
-            ParticleMass(1.0),
-        ))
-        .id();
-    let body = w
-        .spawn((
-            RigidBody::Dynamic,
-            Collider::rectangle(0.2, 0.2),
-            Mass(1.0),
-            Position(Vec2::new(0.25, 0.0)),
-        ))
-        .id();
+    let p = one_kg_particle(w);
+    let body = one_kg_box(w);
     run(&mut app, 3000);
     let v = app.world().get::<ParticleVelocity>(p).unwrap().0.x;
     let u = body_velocity(&app, body).x;

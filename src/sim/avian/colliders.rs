@@ -1,7 +1,7 @@
 //! avian's colliders as hooke's obstacles: each shape in hooke's terms, and the colliders near
 //! the particles gathered for the tick through avian's broad phase.
 
-use super::Coupling;
+use super::{Coupling, Motion};
 use crate::sim::obstacles::Obstacles;
 use crate::sim::params::SimParams;
 use crate::sim::solver::Solver;
@@ -163,18 +163,20 @@ pub(super) fn gather(
             }
         };
         let body = of.map_or(e, |o| o.body);
-        // The collider's motion is its body's: v + ω × (p − c) at any point p.
-        let (mut linear, mut angular, mut com) = (DVec2::ZERO, 0.0, position.0.as_dvec2());
+        // The collider's motion is its body's (a static body, or a collider without one,
+        // stands still).
+        let mut motion = Motion {
+            com: position.0.as_dvec2(),
+            linear: DVec2::ZERO,
+            angular: 0.0,
+        };
         if let Ok((kind, body_at, body_turn, v, w, c, scale)) = bodies.get(body)
             && !kind.is_static()
         {
-            linear = v.map_or(DVec2::ZERO, |v| v.0.as_dvec2());
+            motion = Motion::of(body_at, body_turn, v, w, c);
             if kind.is_dynamic() {
-                linear += fall * scale.map_or(1.0, |s| s.0 as f64);
+                motion.linear += fall * scale.map_or(1.0, |s| s.0 as f64);
             }
-            angular = w.map_or(0.0, |w| w.0 as f64);
-            let local = c.map_or(Vec2::ZERO, |c| c.0);
-            com = (body_at.0 + *body_turn * local).as_dvec2();
         }
         let (center, angle) = (position.0.as_dvec2(), rotation.as_radians() as f64);
         for (shape, offset, turn) in shapes {
@@ -182,8 +184,8 @@ pub(super) fn gather(
             let pose = Pose {
                 center: at,
                 angle: angle + turn,
-                velocity: linear + angular * (at - com).perp(),
-                angular_velocity: angular,
+                velocity: motion.velocity_at(at),
+                angular_velocity: motion.angular,
             };
             obstacles.add_for_tick(e, Placed { shape, pose });
         }

@@ -2,7 +2,7 @@
 //! pulls, onto the dynamic bodies through avian's [`Forces`]; and the attached particles put at
 //! their bodies' points before the step.
 
-use super::Coupling;
+use super::{Coupling, Motion, centre_of_mass};
 use crate::sim::components::{Kinematic, Position as ParticlePosition, Velocity};
 use crate::sim::obstacles::Obstacles;
 use crate::sim::params::SimParams;
@@ -38,20 +38,6 @@ pub struct Attachment {
     pub anchor: Vec2,
 }
 
-/// The world point and velocity of `anchor` on a body at `at`, turned by `turn`, moving with
-/// `v` and `w` about its centre of mass `com`.
-fn point_of(
-    at: &Position,
-    turn: &Rotation,
-    anchor: Vec2,
-    v: DVec2,
-    w: f64,
-    com: DVec2,
-) -> (DVec2, DVec2) {
-    let p = (at.0 + *turn * anchor).as_dvec2();
-    (p, v + w * (p - com).perp())
-}
-
 type BodyMotion<'a> = (
     &'a Position,
     &'a Rotation,
@@ -59,11 +45,6 @@ type BodyMotion<'a> = (
     Option<&'a AngularVelocity>,
     Option<&'a ComputedCenterOfMass>,
 );
-
-/// The body's centre of mass in the world.
-fn centre_of_mass(at: &Position, turn: &Rotation, com: Option<&ComputedCenterOfMass>) -> DVec2 {
-    (at.0 + *turn * com.map_or(Vec2::ZERO, |c| c.0)).as_dvec2()
-}
 
 /// Puts each attached particle at its body's point, moving with it.
 pub(super) fn follow(
@@ -74,11 +55,8 @@ pub(super) fn follow(
         let Ok((at, turn, v, w, com)) = bodies.get(a.body) else {
             continue;
         };
-        let (v, w) = (
-            v.map_or(DVec2::ZERO, |v| v.0.as_dvec2()),
-            w.map_or(0.0, |w| w.0 as f64),
-        );
-        let (p, pv) = point_of(at, turn, a.anchor, v, w, centre_of_mass(at, turn, com));
+        let p = (at.0 + *turn * a.anchor).as_dvec2();
+        let pv = Motion::of(at, turn, v, w, com).velocity_at(p);
         if x.0 != p {
             x.0 = p;
         }

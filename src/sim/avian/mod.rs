@@ -41,6 +41,7 @@ use super::obstacles::Obstacles;
 use super::params::{SimParams, SimStatus, TickPlan};
 use super::schedule::PhysicsSystems;
 use avian2d::prelude::*;
+use bevy::math::DVec2;
 use bevy::prelude::*;
 
 /// The coupling's sets in `FixedUpdate`, in the order of the module docs.
@@ -120,6 +121,43 @@ pub struct Coupling {
     pub skipped: Vec<(Entity, ShapeProblem)>,
     /// The sum of the impulses the particles gave each dynamic body on the last tick, N·s.
     pub impulses: Vec<(Entity, Vec2)>,
+}
+
+/// A rigid body's motion as hooke reads it: its centre of mass in the world, and its
+/// velocities, the same at every point of it as v + ω × (p − c).
+#[derive(Debug, Clone, Copy)]
+struct Motion {
+    com: DVec2,
+    linear: DVec2,
+    angular: f64,
+}
+
+impl Motion {
+    /// The motion of a body at `at`, turned by `turn`, from avian's components (a missing
+    /// velocity is none; a missing centre of mass is the body's origin).
+    fn of(
+        at: &Position,
+        turn: &Rotation,
+        v: Option<&LinearVelocity>,
+        w: Option<&AngularVelocity>,
+        com: Option<&ComputedCenterOfMass>,
+    ) -> Motion {
+        Motion {
+            com: centre_of_mass(at, turn, com),
+            linear: v.map_or(DVec2::ZERO, |v| v.0.as_dvec2()),
+            angular: w.map_or(0.0, |w| w.0 as f64),
+        }
+    }
+
+    /// The velocity of the body's material at the world point `p`.
+    fn velocity_at(&self, p: DVec2) -> DVec2 {
+        self.linear + self.angular * (p - self.com).perp()
+    }
+}
+
+/// A body's centre of mass in the world.
+fn centre_of_mass(at: &Position, turn: &Rotation, com: Option<&ComputedCenterOfMass>) -> DVec2 {
+    (at.0 + *turn * com.map_or(Vec2::ZERO, |c| c.0)).as_dvec2()
 }
 
 /// One clock: a tick is one step of hooke's dt, avian's time runs only while hooke steps.

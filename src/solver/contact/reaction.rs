@@ -108,15 +108,6 @@ impl Reactions {
         let n = self.summed.len();
         std::mem::replace(&mut self.summed, vec![Reaction::default(); n])
     }
-
-    /// Forgets everything noted and summed (the obstacles changed).
-    pub fn clear(&mut self) {
-        self.notes
-            .get_mut()
-            .unwrap_or_else(|e| e.into_inner())
-            .clear();
-        self.summed.clear();
-    }
 }
 
 #[cfg(test)]
