@@ -124,10 +124,29 @@ pub fn headless_app() -> App {
     app
 }
 
+/// Adds avian's plugins, coupled ([`sim::avian::HookeAvianPlugin`]), to a headless app when
+/// the scene has rigid bodies, readied as `App::run` would (`finish`, `cleanup`); nothing for
+/// a scene without, so that its runs step exactly as they did.
+pub fn add_bodies_for(app: &mut App, loaded: &scene::LoadedScene) {
+    #[cfg(feature = "avian")]
+    if !loaded.scene.bodies.is_empty() {
+        app.add_plugins((
+            bevy::transform::TransformPlugin,
+            avian2d::prelude::PhysicsPlugins::default(),
+            sim::avian::HookeAvianPlugin,
+        ));
+        app.finish();
+        app.cleanup();
+    }
+    #[cfg(not(feature = "avian"))]
+    let _ = (app, loaded);
+}
+
 /// A headless app with the scene loaded, running (not paused) and packed into the solver: ready
 /// to step, and its state readable before the first step.
 pub fn running_app(loaded: &scene::LoadedScene) -> Result<App, String> {
     let mut app = headless_app();
+    add_bodies_for(&mut app, loaded);
     let world = app.world_mut();
     scene::load_into_world(world, loaded);
     world.resource_mut::<sim::SimParams>().paused = false;

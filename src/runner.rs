@@ -285,6 +285,7 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
     if overrides.separate_passes {
         app.insert_resource(sim::ParticleSweep { fused: false });
     }
+    crate::add_bodies_for(&mut app, loaded);
     let world = app.world_mut();
     load_into_world(world, loaded);
     {

@@ -128,16 +128,29 @@ fn body_velocity(app: &App, body: Entity) -> DVec2 {
 }
 
 /// A 1 kg soft ball, and a 1 kg particle, hit a 1 kg box head-on with gravity off: the
-/// momentum is kept to 1e-5. Under symplectic Euler at 1e-4 s (the contact pass) and XPBD at
-/// 1/120 s (its substeps).
+/// momentum is kept to 1e-5 under every integrator, each at a step it is made for (the
+/// explicit ones small, the large-step ones at 1/120 s), by whichever place its contact acts
+/// in: the contact pass, the velocity pass after a solve, XPBD's substeps, the contact forces
+/// of the implicit solves, VBD's last sweep. Two limits, measured here: VBD's notes are exact
+/// where its iterations converge (200 here; its default 10 left the pair's momentum 27 %
+/// high), and BDF2's history carries part of a soft ball's contact into later steps, where
+/// the box does not see it (the pair keeps 78 %, never more than it had).
 #[test]
 fn a_head_on_impact_keeps_the_momentum() {
     for (integrator, dt, frames) in [
         (Integrator::SymplecticEuler, 1e-4, 8000),
+        (Integrator::ExplicitEuler, 1e-5, 80000),
+        (Integrator::VelocityVerlet, 1e-4, 8000),
+        (Integrator::Rk4, 1e-4, 8000),
         (Integrator::Xpbd, 1.0 / 120.0, 96),
+        (Integrator::ImplicitEuler, 1.0 / 120.0, 96),
+        (Integrator::ProjectiveDynamics, 1.0 / 120.0, 96),
+        (Integrator::Bdf2, 1.0 / 120.0, 96),
+        (Integrator::Vbd, 1.0 / 120.0, 96),
     ] {
         for ball in [true, false] {
             let mut app = coupled(integrator, dt, Vec2::ZERO);
+            app.world_mut().resource_mut::<SimParams>().iterations.vbd = 200;
             let w = app.world_mut();
             if ball {
                 soft_ball(w, DVec2::new(0.0, 0.0), 0.1, 1.0, DVec2::new(1.0, 0.0));
@@ -160,7 +173,14 @@ fn a_head_on_impact_keeps_the_momentum() {
             println!(
                 "{integrator}, ball {ball}: momentum drift {drift:.1e}, box {box_v}, ball {ball_v}"
             );
-            assert!(drift < 1e-5, "{integrator}: momentum {before} -> {after}");
+            if ball && integrator == Integrator::Bdf2 {
+                assert!(
+                    after.x < before.x && after.x > 0.7 * before.x,
+                    "{integrator}: momentum {before} -> {after}"
+                );
+            } else {
+                assert!(drift < 1e-5, "{integrator}: momentum {before} -> {after}");
+            }
         }
     }
 }
@@ -353,7 +373,7 @@ fn a_trampoline_carries_a_box() {
 /// A heavy box (10 kg) on a light cloth (0.8 g a particle): the cloth sags and holds it, and
 /// nothing goes non-finite or through.
 #[test]
-#[ignore = "not met yet: the light cloth cannot stop the heavy box (see docs/library.md)"]
+#[ignore = "not met: 10 kg on 0.8 g of cloth falls through it (docs/library.md)"]
 fn a_heavy_box_on_a_light_cloth_stays_above_it() {
     let mut app = coupled(Integrator::Xpbd, 1.0 / 60.0, Vec2::new(0.0, -9.81));
     app.world_mut().resource_mut::<SimParams>().damping = 5.0;
@@ -485,7 +505,6 @@ fn the_two_clocks_step_together() {
 /// With restitution 0, a 1 kg particle and the 1 kg box it hits leave together at half its
 /// speed.
 #[test]
-#[ignore = "not met yet: within a step the body is as heavy as a wall (docs/library.md)"]
 fn an_inelastic_impact_leaves_together() {
     let mut app = coupled(Integrator::SymplecticEuler, 1e-4, Vec2::ZERO);
     let w = app.world_mut();
@@ -498,4 +517,83 @@ fn an_inelastic_impact_leaves_together() {
         (v - 0.5).abs() < 0.01 && (u - 0.5).abs() < 0.01,
         "particle {v} m/s, box {u} m/s"
     );
+}
+
+/// The shipped `crates` scene: its rigid bodies load as avian's, run coupled by the runner's
+/// `advance` (a tick a step), fall into the net and rest in it, and save back as they are.
+#[test]
+fn a_scene_with_bodies_runs_rests_and_saves_back() {
+    use hooke::scene::{LoadedScene, load_into_world, snapshot, to_ron};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/crates.ron");
+    let loaded = LoadedScene::read(&path).unwrap_or_else(|e| panic!("{e}"));
+    let mut app = hooke::running_app(&loaded).unwrap();
+    // The bodies' heights: the dynamic ones by entity, then the fixed one.
+    let heights = |app: &mut App| -> Vec<f32> {
+        let w = app.world_mut();
+        let mut all: Vec<(bool, Entity, f32)> = w
+            .query::<(Entity, &RigidBody, &Position)>()
+            .iter(w)
+            .map(|(e, kind, p)| (kind.is_static(), e, p.0.y))
+            .collect();
+        all.sort_by_key(|(fixed, e, _)| (*fixed, *e));
+        all.into_iter().map(|(.., y)| y).collect()
+    };
+    let start = heights(&mut app);
+    assert_eq!(start.len(), 4);
+    let taken = hooke::sim::advance(app.world_mut(), 960);
+    assert_eq!(taken, 960);
+    let rest = heights(&mut app);
+    // The three falling bodies came down into the net (its ends hang at 0.4 m) and rest there,
+    // above the ground body's top (0.1 m); the ground body stays.
+    for (k, (a, b)) in start.iter().zip(&rest).enumerate().take(3) {
+        assert!(b < a && *b > 0.3, "body {k}: {a} -> {b}");
+    }
+    assert_eq!(rest[3], start[3]);
+    let before = rest;
+    hooke::sim::advance(app.world_mut(), 240);
+    let after = heights(&mut app);
+    for (a, b) in before.iter().zip(&after) {
+        assert!((a - b).abs() < 0.01, "still moving: {a} -> {b}");
+    }
+    // Saved and loaded back: the same bodies, where they were, moving as they moved.
+    let saved = snapshot(app.world_mut());
+    assert_eq!(saved.bodies.len(), 4);
+    let text = to_ron(&saved).unwrap();
+    let back = LoadedScene::parse(&text, std::path::Path::new("saved.ron")).unwrap();
+    assert_eq!(back.scene.bodies, saved.bodies);
+    let mut again = hooke::headless_app();
+    load_into_world(again.world_mut(), &back);
+    assert_eq!(heights(&mut again), after);
+}
+
+/// A body's bad values and misspelled fields are named, with where they are.
+#[test]
+fn a_bad_body_is_named() {
+    use hooke::scene::LoadedScene;
+    let scene = |bodies: &str| {
+        format!(
+            "(gravity: (0.0, -9.8), damping: 0.0, ground: None, integrator: Xpbd, dt: 0.01, \
+             bodies: [{bodies}])"
+        )
+    };
+    let error = |bodies: &str| {
+        LoadedScene::parse(&scene(bodies), std::path::Path::new("bad.ron"))
+            .unwrap_err()
+            .to_string()
+    };
+    let e = error("(shape: Circle(center: (0.5, 0.5), radius: 0.1), mass: -1.0)");
+    assert!(
+        e.contains("bodies[0].mass: must be finite and > 0, got -1"),
+        "{e}"
+    );
+    let e = error(
+        "(shape: Circle(center: (0.5, 0.5), radius: 0.1)), (shape: Box(center: (0.0, 0.0), half: (0.0, 0.1)))",
+    );
+    assert!(e.contains("bodies[1].shape"), "{e}");
+    let e = error("(shape: Circle(center: (0.5, 0.5), radius: 0.1), mas: 2.0)");
+    assert!(e.contains("mas") && e.contains("mass"), "{e}");
+    let e = error(
+        "(shape: Polygon(center: (0.5, 0.5), corners: [(0.0, 0.0), (0.1, 0.0), (0.05, 0.01), (0.05, 0.1)]))",
+    );
+    assert!(e.contains("bodies[0].shape") && e.contains("convex"), "{e}");
 }

@@ -62,6 +62,40 @@ pub struct Scene {
     /// Gas-filled loops of explicit or generated particles (a `Ring` generator adds its own).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub pressure: Vec<PressureDef>,
+    /// Rigid bodies of avian2d, which the particles push and which push them (a build with the
+    /// `avian` feature, the default one, runs them; another refuses the scene and says so).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub bodies: Vec<BodyDef>,
+}
+
+/// A rigid body as written in a scene: a shape of the obstacles' kinds where it starts, its
+/// mass and its motion: `(shape: Box(center: (0.5, 0.6), half: (0.1, 0.05)), mass: 0.5)`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodyDef {
+    /// Its shape and where it starts (its centre is its position; a polygon's centre need not
+    /// be its centre of mass).
+    pub shape: ObstacleDef,
+    /// Its mass, kg; default 1. Its moment of inertia is the shape's, of uniform density.
+    #[serde(default = "default_body_mass")]
+    pub mass: f64,
+    /// Its velocity (x, y), m/s; default at rest.
+    #[serde(default, skip_serializing_if = "is_zero_pair")]
+    pub velocity: (f64, f64),
+    /// Its angular velocity, rad/s (counter-clockwise); default 0.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub spin: f64,
+    /// A body that never moves (avian's static body); default false: it falls, is pushed, turns.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub fixed: bool,
+}
+
+fn default_body_mass() -> f64 {
+    1.0
+}
+
+fn is_zero_pair(v: &(f64, f64)) -> bool {
+    *v == (0.0, 0.0)
 }
 
 /// A closed loop of particles filled with gas: `pressure: [(particles: [0, 1, 2, 3], nrt: 20.0)]`.
@@ -452,6 +486,7 @@ impl Default for Scene {
             obstacles: vec![],
             contact: p.contact,
             pressure: vec![],
+            bodies: vec![],
         }
     }
 }

@@ -165,6 +165,7 @@ pub fn load_into_world(world: &mut World, loaded: &LoadedScene) {
     };
     despawn_contents(world, params);
     replace_obstacles(world, &s.obstacles);
+    super::bodies::replace_bodies(world, &s.bodies, DVec2::from(s.gravity));
     let particles = spawn_streamed(
         world,
         loaded.scene.particle_defs(),
@@ -365,6 +366,7 @@ pub fn snapshot(world: &mut World) -> Scene {
         .get_resource::<CurrentScene>()
         .and_then(|c| c.0.scene.click);
     let obstacles = obstacle_defs(world);
+    let bodies = super::bodies::body_defs(world);
     Scene {
         gravity: (params.gravity.x, params.gravity.y),
         damping: params.damping,
@@ -383,6 +385,7 @@ pub fn snapshot(world: &mut World) -> Scene {
         obstacles,
         contact: params.contact,
         pressure: state.pressure,
+        bodies,
     }
 }
 

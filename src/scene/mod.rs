@@ -1,5 +1,6 @@
 //! Scenes: the RON file format, parametric generators, validation and loading.
 
+pub mod bodies;
 pub mod format;
 pub mod generate;
 pub mod load;

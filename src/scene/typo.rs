@@ -51,9 +51,12 @@ fn place(outer: &str) -> String {
         "Pin" => "`pin`",
         "ObstacleDef" => "`obstacles`",
         "ContactSettings" => "`contact`",
+        "BodyDef" => "a body of `bodies`",
         // The variants of the format's enums, named by the list they stand in.
         "Grid" | "Chain" => return format!(" in a `{outer}` of `generate`"),
-        "Circle" | "Box" | "Segment" => return format!(" in a `{outer}` of `obstacles`"),
+        "Circle" | "Box" | "Segment" | "Polygon" => {
+            return format!(" in a `{outer}` of `obstacles` or a body's `shape`");
+        }
         other => return format!(" in `{other}`"),
     };
     format!(" in {name}")

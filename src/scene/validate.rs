@@ -70,6 +70,7 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
             p.push(format!("obstacles[{i}]: {what}: {rule}{got}"));
         }
     }
+    check_bodies(&mut p, &scene.bodies);
     if let Some(c) = &scene.click {
         if !(c.radius.is_finite() && c.radius >= 0.0) {
             p.push(format!(
@@ -373,5 +374,72 @@ impl Problems {
                 .push(format!("... and {} more problems", self.more));
         }
         self.list
+    }
+}
+
+/// The rigid bodies: each a shape that makes a collider, a mass, a finite motion; and a build
+/// that runs them.
+fn check_bodies(p: &mut Problems, bodies: &[super::format::BodyDef]) {
+    if !bodies.is_empty() && !cfg!(feature = "avian") {
+        p.push(format!(
+            "bodies: {} rigid bodies, but this build of hooke has no rigid bodies (build it with \
+             the `avian` feature, as the default build is)",
+            bodies.len()
+        ));
+        return;
+    }
+    for (i, b) in bodies.iter().enumerate() {
+        match b.shape.placed() {
+            Ok(placed) => {
+                if let Some((what, v, rule)) = placed.problem() {
+                    p.push(format!("bodies[{i}].shape: {what}: {rule}, got {v}"));
+                }
+            }
+            Err(e) => p.push(format!("bodies[{i}].shape: {e}")),
+        }
+        if !(b.mass.is_finite() && b.mass > 0.0) {
+            p.push(format!(
+                "bodies[{i}].mass: must be finite and > 0, got {}",
+                b.mass
+            ));
+        }
+        let (vx, vy) = b.velocity;
+        if !(vx.is_finite() && vy.is_finite()) {
+            p.push(format!(
+                "bodies[{i}].velocity: must be finite, got ({vx}, {vy})"
+            ));
+        }
+        if !b.spin.is_finite() {
+            p.push(format!("bodies[{i}].spin: must be finite, got {}", b.spin));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// A build without rigid bodies refuses a scene that has some, and says how to get them.
+    #[test]
+    fn bodies_need_a_build_that_has_them() {
+        let mut scene = super::Scene::default();
+        scene.bodies.push(crate::scene::BodyDef {
+            shape: crate::scene::ObstacleDef::Circle {
+                center: (0.5, 0.5),
+                radius: 0.1,
+            },
+            mass: 1.0,
+            velocity: (0.0, 0.0),
+            spin: 0.0,
+            fixed: false,
+        });
+        let result = super::validate(&scene);
+        if cfg!(feature = "avian") {
+            assert_eq!(result, Ok(()));
+        } else {
+            let e = result.unwrap_err().join("\n");
+            assert!(
+                e.contains("bodies:") && e.contains("`avian` feature"),
+                "{e}"
+            );
+        }
     }
 }

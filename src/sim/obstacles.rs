@@ -10,7 +10,7 @@
 //! read the contacts back, without this crate knowing the rigid-body engine.
 
 use super::components::CreationOrder;
-use crate::solver::{Placed, Pose, Shape};
+use crate::solver::{Inertia, Placed, Pose, Shape};
 use bevy::math::DVec2;
 use bevy::prelude::*;
 
@@ -88,11 +88,17 @@ impl Obstacles {
 
     /// Adds an obstacle that no entity of this crate owns (an adapter's: a rigid body's
     /// collider) for this tick's steps, after the entities' own were gathered; returns its
-    /// index. Gathered again each tick, so the adapter adds it again each tick.
-    pub fn add_for_tick(&mut self, owner: Entity, placed: Placed) -> usize {
+    /// index. Gathered again each tick, so the adapter adds it again each tick. `body` is how
+    /// the body behind it answers the particles' impulses (the default: as a wall), which
+    /// counts only while [`Self::feel`] is on.
+    pub fn add_for_tick(&mut self, owner: Entity, placed: Placed, body: Inertia) -> usize {
         self.entities.push(owner);
         self.placed.push(placed);
-        self.placed.len() - 1
+        let index = self.placed.len() - 1;
+        if body != Inertia::default() {
+            self.reactions.set_inertia(index, body);
+        }
+        index
     }
 
     /// Moves the moving obstacles by their velocities over `dt` (after each step's contact
@@ -141,6 +147,7 @@ pub(crate) fn gather_obstacles(
     let o = obstacles.bypass_change_detection();
     o.placed.clear();
     o.entities.clear();
+    o.reactions.clear_inertia();
     for (e, _, shape, pose, vel) in all {
         o.entities.push(e);
         o.placed.push(placed(shape, pose, vel));

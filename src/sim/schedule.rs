@@ -250,7 +250,11 @@ impl Plugin for SimPlugin {
             (
                 (
                     check_tick,
-                    (sync_tick, super::obstacles::gather_obstacles).run_if(inputs::inputs_valid),
+                    // The solver synced first: an adapter's obstacles gathered after hooke's
+                    // (`sim::avian`) read the particles' bounds from it.
+                    (sync_tick, super::obstacles::gather_obstacles)
+                        .chain()
+                        .run_if(inputs::inputs_valid),
                 )
                     .chain()
                     .in_set(PhysicsSystems::Prepare),
@@ -628,7 +632,10 @@ fn collide(
     let o = obstacles.bypass_change_detection();
     o.contacts = contacts;
     if o.feel {
-        o.reactions.gather(o.placed.len());
+        // The bodies' masses take their part of the step's contacts (the particles'
+        // velocities give some back), then the notes are summed for the adapter.
+        o.reactions
+            .close_step(o.placed.len(), &mut s.state.v, &s.state.inv_mass);
     }
     if o.advance(dt) {
         obstacles.set_changed();
@@ -731,11 +738,33 @@ fn mark_frame_end(mut budget: ResMut<StepBudget>) {
 pub fn advance(world: &mut World, steps: u64) -> u64 {
     let start = world.resource::<SimClock>().steps;
     let dt = world.resource::<SimParams>().dt;
-    let per_tick = world.resource::<TickPlan>().steps_at(dt);
+    // With rigid bodies coupled, a tick is one step of both engines.
+    #[cfg(feature = "avian")]
+    let coupled = super::avian::coupled(world);
+    #[cfg(not(feature = "avian"))]
+    let coupled = false;
+    let per_tick = if coupled {
+        1
+    } else {
+        world.resource::<TickPlan>().steps_at(dt)
+    };
     let mut remaining = steps;
     while remaining > 0 {
         let n = remaining.min(per_tick);
         world.resource_mut::<TickPlan>().steps_per_tick = n as u32;
+        #[cfg(feature = "avian")]
+        if coupled {
+            let before = super::avian::enter_tick(world, dt);
+            world.resource_mut::<super::obstacles::Obstacles>().feel = true;
+            world.run_schedule(FixedMain);
+            *world.resource_mut::<Time>() = before;
+            let taken = world.resource::<SimClock>().steps - start;
+            if taken < steps - remaining + n {
+                break;
+            }
+            remaining -= n;
+            continue;
+        }
         world.run_schedule(FixedMain);
         let taken = world.resource::<SimClock>().steps - start;
         if taken < steps - remaining + n {

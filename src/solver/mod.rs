@@ -43,7 +43,7 @@ pub(crate) mod threads;
 
 pub use contact::obstacle::{Placed, Polygon, Pose, Shape};
 pub use contact::pairs::{PairReport, Pairs};
-pub use contact::{ContactSettings, Reaction, Reactions, Surroundings};
+pub use contact::{ContactSettings, Inertia, Reaction, Reactions, Surroundings};
 pub use forces::material::{GasBody, Materials, PackedMuscle, PackedPlastic};
 pub use forces::sweep::{Contact, Motion, Sweep};
 pub use method::{Integrator, Iterations};

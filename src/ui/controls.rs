@@ -29,6 +29,10 @@ pub const CONTROLS: &[(&str, &str)] = &[
         "draw a ball (a ring filled with gas): centre, then radius",
     ),
     (
+        "K + left drag",
+        "drop a crate (a rigid body): corner to corner",
+    ),
+    (
         "left press on an obstacle",
         "move it; what rests on it follows by friction",
     ),

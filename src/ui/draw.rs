@@ -22,6 +22,8 @@ pub(super) const PINNED: Color = Color::srgb(1.0, 0.75, 0.2);
 pub(super) const HELD: Color = Color::srgb(0.35, 0.85, 1.0);
 const ATTRACTION: Color = Color::srgba(0.35, 0.85, 1.0, 0.8);
 const OBSTACLE: Color = Color::srgb(0.55, 0.75, 0.45);
+/// Rigid bodies that move (avian's dynamic ones); those that do not are drawn as obstacles.
+const BODY: Color = Color::srgb(0.85, 0.55, 0.35);
 /// An obstacle being built (the drag's preview).
 const BUILDING: Color = Color::srgb(0.95, 0.8, 0.35);
 /// Particle dot radius, in logical pixels.
@@ -297,6 +299,35 @@ pub fn draw_obstacles(
         let least = super::pointer::CLICK_SLOP_PX as f64 * view.pixel();
         if let Some((shape, center)) = kind.shape(from, to, least) {
             outline(&mut gizmos, shape, center, 0.0, BUILDING);
+        }
+    }
+}
+
+/// avian's rigid bodies' colliders at their poses, in the obstacles' outlines: a dynamic body
+/// in its own colour, the others as obstacles (they do not move either). A shape the particles
+/// cannot touch (`sim::avian::obstacle_shapes` says which) is not drawn.
+pub fn draw_bodies(
+    mut gizmos: Gizmos,
+    bodies: Query<(
+        &avian2d::prelude::Collider,
+        &avian2d::prelude::Position,
+        &avian2d::prelude::Rotation,
+        Option<&avian2d::prelude::RigidBody>,
+    )>,
+) {
+    for (collider, at, turn, kind) in &bodies {
+        let Ok(shapes) = crate::sim::avian::obstacle_shapes(collider) else {
+            continue;
+        };
+        let color = if kind.is_some_and(|k| k.is_dynamic()) {
+            BODY
+        } else {
+            OBSTACLE
+        };
+        let (center, angle) = (at.0.as_dvec2(), turn.as_radians() as f64);
+        for (shape, offset, spin) in shapes {
+            let c = center + DVec2::from_angle(angle).rotate(offset);
+            outline(&mut gizmos, shape, c, angle + spin, color);
         }
     }
 }

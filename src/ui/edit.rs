@@ -112,6 +112,28 @@ pub fn add_obstacle(commands: &mut Commands, shape: Shape, center: DVec2) {
     commands.spawn((Obstacle(shape), ObstaclePose { center, angle: 0.0 }));
 }
 
+/// The crates' density, kg/m²: a 10 cm crate weighs 1 kg, as the app's particles do.
+pub const CRATE_DENSITY: f64 = 100.0;
+
+/// Adds a crate, a rigid box of avian's of half size `half` centred at `center`, at rest.
+pub fn add_crate(commands: &mut Commands, half: DVec2, center: DVec2) {
+    commands.queue(history::before("crate"));
+    let def = crate::scene::BodyDef {
+        shape: crate::scene::ObstacleDef::Box {
+            center: (center.x, center.y),
+            half: (half.x, half.y),
+            angle: 0.0,
+        },
+        mass: 4.0 * half.x * half.y * CRATE_DENSITY,
+        velocity: (0.0, 0.0),
+        spin: 0.0,
+        fixed: false,
+    };
+    commands.queue(move |world: &mut World| {
+        crate::scene::bodies::spawn_body(world, &def);
+    });
+}
+
 /// Deletes an obstacle.
 pub fn delete_obstacle(commands: &mut Commands, obstacle: Entity) {
     commands.queue(history::before("delete obstacle"));

@@ -8,9 +8,10 @@
 //! kind of edit (a slider drag, a tearing cloth) within [`COALESCE`] is one entry
 //! ([`record_burst`]); discrete edits (clicks, keys) are one entry each ([`record`]).
 
+use crate::scene::bodies::{body_defs, replace_bodies};
 use crate::scene::{
-    Expanded, ObstacleDef, ParticleDef, PressureDef, SpringDef, explicit_state, obstacle_defs,
-    replace_contents, replace_obstacles,
+    BodyDef, Expanded, ObstacleDef, ParticleDef, PressureDef, SpringDef, explicit_state,
+    obstacle_defs, replace_contents, replace_obstacles,
 };
 use crate::sim::{SimClock, SimParams, SimStatus, watch::EnergyWatch};
 use bevy::prelude::*;
@@ -34,6 +35,8 @@ pub struct State {
     pub obstacles: Vec<ObstacleDef>,
     /// The gas-filled loops.
     pub pressure: Vec<PressureDef>,
+    /// The rigid bodies at their poses, moving as they moved.
+    pub bodies: Vec<BodyDef>,
 }
 
 #[derive(Debug, Clone)]
@@ -99,6 +102,7 @@ fn capture(world: &mut World, params: Option<SimParams>) -> State {
         springs,
         obstacles: obstacle_defs(world),
         pressure,
+        bodies: body_defs(world),
     }
 }
 
@@ -166,6 +170,10 @@ fn restore(world: &mut World, state: &State) {
     replace_contents(world, params, &expanded);
     if obstacle_defs(world) != state.obstacles {
         replace_obstacles(world, &state.obstacles);
+    }
+    if body_defs(world) != state.bodies {
+        let gravity = state.params.gravity;
+        replace_bodies(world, &state.bodies, gravity);
     }
     *world.resource_mut::<SimClock>() = state.clock;
     *world.resource_mut::<SimStatus>() = SimStatus::Running;

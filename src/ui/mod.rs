@@ -113,8 +113,15 @@ impl Plugin for AppPlugin {
                     draw::update_batches.after(pointer::drag),
                     draw::draw_frame.after(pointer::attract),
                     draw::draw_obstacles,
+                    draw::draw_bodies,
                 ),
             );
+        // Rigid bodies: avian's plugins, coupled. Without a body in the scene nothing of it
+        // runs (`sim::avian`'s clock).
+        app.add_plugins((
+            avian2d::prelude::PhysicsPlugins::default(),
+            crate::sim::avian::HookeAvianPlugin,
+        ));
     }
 }
 

@@ -1,7 +1,7 @@
 //! Mouse gestures on the canvas: a press on a particle grabs it, a click on empty canvas adds
 //! one (shift: pinned), ctrl + drag cuts springs, the right button attracts. With O, B or L
-//! held a left drag builds an obstacle (a circle, a box, a segment), and a press on an
-//! obstacle moves it.
+//! held a left drag builds an obstacle (a circle, a box, a segment), with J a ball of
+//! particles, with K a crate (a rigid body), and a press on an obstacle moves it.
 //!
 //! The grab is kinematic: while held, the particle is placed at the cursor every frame and
 //! moves with the cursor's velocity during the ticks in between (the solver treats it as
@@ -83,6 +83,9 @@ pub enum Build {
     /// J: a ball (a ring of particles filled with gas, a pressure body), centred where the
     /// drag began, through the cursor. Not an obstacle: it falls, bounces and squashes.
     Ball,
+    /// K: a crate, a rigid box of avian's, with corners where the drag began and at the
+    /// cursor. Not an obstacle either: it falls, the particles push it and it pushes them.
+    Crate,
 }
 
 impl Build {
@@ -93,6 +96,7 @@ impl Build {
             (KeyCode::KeyB, Build::Box),
             (KeyCode::KeyL, Build::Segment),
             (KeyCode::KeyJ, Build::Ball),
+            (KeyCode::KeyK, Build::Crate),
         ]
         .into_iter()
         .find(|(k, _)| keys.pressed(*k) || keys.just_released(*k))
@@ -108,7 +112,7 @@ impl Build {
                 let radius = d.length();
                 (Shape::Circle { radius }, from)
             }),
-            Build::Box => (d.x.abs() >= least && d.y.abs() >= least).then(|| {
+            Build::Box | Build::Crate => (d.x.abs() >= least && d.y.abs() >= least).then(|| {
                 let half = d.abs() * 0.5;
                 (Shape::Box { half }, from + d * 0.5)
             }),
@@ -328,6 +332,9 @@ pub fn drag(
                     (Some((Shape::Circle { radius }, center)), Build::Ball) => {
                         let stiffness = params.stiffness_override.unwrap_or(DEFAULT_STIFFNESS);
                         edit::add_ball(&mut commands, center, radius, stiffness);
+                    }
+                    (Some((Shape::Box { half }, center)), Build::Crate) => {
+                        edit::add_crate(&mut commands, half, center);
                     }
                     (Some((shape, center)), _) => edit::add_obstacle(&mut commands, shape, center),
                     (None, _) => {}

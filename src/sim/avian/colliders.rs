@@ -1,11 +1,11 @@
 //! avian's colliders as hooke's obstacles: each shape in hooke's terms, and the colliders near
-//! the particles gathered for the tick through avian's broad phase.
+//! the particles gathered for the tick.
 
 use super::{Coupling, Motion};
 use crate::sim::obstacles::Obstacles;
 use crate::sim::params::SimParams;
 use crate::sim::solver::Solver;
-use crate::solver::{Placed, Polygon, Pose, Shape};
+use crate::solver::{Inertia, Placed, Polygon, Pose, Shape};
 use avian2d::parry::shape::TypedShape;
 use avian2d::prelude::*;
 use bevy::math::DVec2;
@@ -120,6 +120,8 @@ type BodyState<'a> = (
     Option<&'a AngularVelocity>,
     Option<&'a ComputedCenterOfMass>,
     Option<&'a GravityScale>,
+    Option<&'a ComputedMass>,
+    Option<&'a ComputedAngularInertia>,
 );
 
 /// Adds avian's colliders near the particles to this tick's obstacles.
@@ -129,10 +131,9 @@ pub(super) fn gather(
     mut coupling: ResMut<Coupling>,
     solver: Res<Solver>,
     params: Res<SimParams>,
-    spatial: SpatialQuery,
     gravity: Res<Gravity>,
     substeps: Res<SubstepCount>,
-    colliders: Query<(&Collider, &Position, &Rotation, Option<&ColliderOf>)>,
+    colliders: Query<(Entity, &Collider, &Position, &Rotation, Option<&ColliderOf>)>,
     bodies: Query<BodyState>,
 ) {
     // A dynamic body's mean velocity over avian's coming step without the particles: its
@@ -144,14 +145,13 @@ pub(super) fn gather(
     let Some((lo, hi)) = particle_bounds(&solver, &params) else {
         return;
     };
-    let mut near = spatial
-        .aabb_intersections_with_aabb(ColliderAabb::from_min_max(lo.as_vec2(), hi.as_vec2()));
-    // In one order whatever the tree's, so that a run repeats bit for bit.
-    near.sort();
-    for e in near {
-        let Ok((collider, position, rotation, of)) = colliders.get(e) else {
-            continue;
-        };
+    // Every collider, each tested by its shapes' bounds against the particles' (not avian's
+    // collider tree: it is built in avian's step, after hooke's, so a body spawned this tick
+    // was not in it yet and the particles fell into it for a step). In the entities' order,
+    // so that a run repeats bit for bit.
+    let mut all: Vec<_> = colliders.iter().collect();
+    all.sort_by_key(|c| c.0);
+    for (e, collider, position, rotation, of) in all {
         let shapes = match obstacle_shapes(collider) {
             Ok(s) => s,
             Err(why) => {
@@ -162,6 +162,23 @@ pub(super) fn gather(
                 continue;
             }
         };
+        let (center, angle) = (position.0.as_dvec2(), rotation.as_radians() as f64);
+        let placed_at = |(shape, offset, turn): &(Shape, DVec2, f64)| {
+            Placed::at(
+                *shape,
+                center + DVec2::from_angle(angle).rotate(*offset),
+                angle + turn,
+            )
+        };
+        let near = shapes.iter().any(|s| {
+            let p = placed_at(s);
+            let reach = DVec2::splat(p.bound());
+            let (a, b) = (p.pose.center - reach, p.pose.center + reach);
+            a.x <= hi.x && a.y <= hi.y && b.x >= lo.x && b.y >= lo.y
+        });
+        if !near {
+            continue;
+        }
         let body = of.map_or(e, |o| o.body);
         // The collider's motion is its body's (a static body, or a collider without one,
         // stands still).
@@ -170,15 +187,22 @@ pub(super) fn gather(
             linear: DVec2::ZERO,
             angular: 0.0,
         };
-        if let Ok((kind, body_at, body_turn, v, w, c, scale)) = bodies.get(body)
+        // How the body answers the particles' impulses: a dynamic one by its mass, the others
+        // as walls.
+        let mut inertia = Inertia::default();
+        if let Ok((kind, body_at, body_turn, v, w, c, scale, mass, turning)) = bodies.get(body)
             && !kind.is_static()
         {
             motion = Motion::of(body_at, body_turn, v, w, c);
             if kind.is_dynamic() {
                 motion.linear += fall * scale.map_or(1.0, |s| s.0 as f64);
+                inertia = Inertia {
+                    inverse_mass: mass.map_or(0.0, |m| m.inverse() as f64),
+                    inverse_inertia: turning.map_or(0.0, |i| i.inverse() as f64),
+                    center_of_mass: motion.com,
+                };
             }
         }
-        let (center, angle) = (position.0.as_dvec2(), rotation.as_radians() as f64);
         for (shape, offset, turn) in shapes {
             let at = center + DVec2::from_angle(angle).rotate(offset);
             let pose = Pose {
@@ -187,7 +211,7 @@ pub(super) fn gather(
                 velocity: motion.velocity_at(at),
                 angular_velocity: motion.angular,
             };
-            obstacles.add_for_tick(e, Placed { shape, pose });
+            obstacles.add_for_tick(e, Placed { shape, pose }, inertia);
         }
         coupling.colliders += 1;
     }

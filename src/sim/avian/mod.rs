@@ -17,9 +17,9 @@
 //!    attached particle is put at its body's point, with that point's velocity, held
 //!    kinematic for the step.
 //! 2. In [`PhysicsSystems::Prepare`], after hooke's own obstacles are gathered:
-//!    [`AvianSystems::Colliders`]. One query of avian's broad phase (its collider tree) over
-//!    the particles' bounds, grown by a step's travel, names the colliders near them; each is
-//!    added to the tick's obstacles at its body's pose and velocity.
+//!    [`AvianSystems::Colliders`]. Every collider whose shapes' bounds meet the particles'
+//!    bounds, grown by a step's travel, is added to the tick's obstacles at its body's pose and
+//!    velocity, with the body's mass for the contacts' share ([`crate::solver::Inertia`]).
 //! 3. hooke's step ([`PhysicsSystems::Step`]) collides the particles with them under the
 //!    chosen integrator, and notes the impulse each contact gives
 //!    ([`crate::solver::contact::reaction`]).
@@ -106,8 +106,6 @@ impl Plugin for HookeAvianPlugin {
             FixedUpdate,
             AvianSystems::Colliders.before(super::gpu::decide_device),
         );
-        // The step notes what the obstacles take back only while this plugin is in.
-        app.world_mut().resource_mut::<Obstacles>().feel = true;
     }
 }
 
@@ -121,6 +119,8 @@ pub struct Coupling {
     pub skipped: Vec<(Entity, ShapeProblem)>,
     /// The sum of the impulses the particles gave each dynamic body on the last tick, N·s.
     pub impulses: Vec<(Entity, Vec2)>,
+    /// hooke's own tick length while bodies set it to dt, to give back when none is left.
+    own_tick: Option<f64>,
 }
 
 /// A rigid body's motion as hooke reads it: its centre of mass in the world, and its
@@ -161,21 +161,65 @@ fn centre_of_mass(at: &Position, turn: &Rotation, com: Option<&ComputedCenterOfM
 }
 
 /// One clock: a tick is one step of hooke's dt, avian's time runs only while hooke steps.
+/// Without a rigid body (an app that has the plugin but whose scene has none) nothing is
+/// coupled: hooke's tick is its own again, avian's time stands still, and the steps note no
+/// contact for anyone.
 fn one_clock(
     params: Res<SimParams>,
     status: Res<SimStatus>,
+    bodies: Query<(), With<RigidBody>>,
+    mut coupling: ResMut<Coupling>,
+    mut obstacles: ResMut<Obstacles>,
     mut plan: ResMut<TickPlan>,
     mut physics: ResMut<Time<Physics>>,
 ) {
-    if params.dt.is_finite() && params.dt > 0.0 && plan.target_tick_seconds != params.dt {
-        plan.target_tick_seconds = params.dt;
+    let coupled = !bodies.is_empty();
+    if coupled {
+        if coupling.own_tick.is_none() {
+            coupling.own_tick = Some(plan.target_tick_seconds);
+        }
+        if params.dt.is_finite() && params.dt > 0.0 && plan.target_tick_seconds != params.dt {
+            plan.target_tick_seconds = params.dt;
+        }
+    } else if let Some(own) = coupling.own_tick.take() {
+        plan.target_tick_seconds = own;
     }
-    let running = !params.paused && *status == SimStatus::Running;
+    if obstacles.feel != coupled {
+        obstacles.feel = coupled;
+    }
+    let running = coupled && !params.paused && *status == SimStatus::Running;
     if running && physics.is_paused() {
         physics.unpause();
     } else if !running && !physics.is_paused() {
         physics.pause();
     }
+}
+
+/// Readies the clocks for one tick run by hand ([`crate::sim::advance`]): the fixed clock
+/// moved on by `dt` and made the generic `Time`, as Bevy's fixed loop does, so that avian's
+/// step in the tick is dt long. Returns the clock to put back after the tick.
+pub(crate) fn enter_tick(world: &mut World, dt: f64) -> Time {
+    let before = *world.resource::<Time>();
+    let step = std::time::Duration::from_secs_f64(dt);
+    let mut fixed = world.resource_mut::<Time<Fixed>>();
+    fixed.set_timestep(step);
+    fixed.advance_by(step);
+    let generic = fixed.as_generic();
+    *world.resource_mut::<Time>() = generic;
+    if world.resource::<Time<Physics>>().is_paused() {
+        world.resource_mut::<Time<Physics>>().unpause();
+    }
+    before
+}
+
+/// Whether rigid bodies are coupled in this world: the plugin is in and some body exists.
+pub(crate) fn coupled(world: &mut World) -> bool {
+    world.contains_resource::<Coupling>()
+        && world
+            .query_filtered::<(), With<RigidBody>>()
+            .iter(world)
+            .next()
+            .is_some()
 }
 
 /// One gravity: avian's, copied into hooke's parameters when it differs.

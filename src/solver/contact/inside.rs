@@ -53,6 +53,14 @@ pub struct InSolve<'a> {
     reactions: Option<&'a Reactions>,
 }
 
+/// The last surface that held a particle out: its outward normal, and the obstacle's index
+/// (`None` for the ground).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Held {
+    pub normal: DVec2,
+    pub obstacle: Option<usize>,
+}
+
 impl<'a> InSolve<'a> {
     /// The contact of a step of `dt` with `around`'s surfaces, and with particle pairs through
     /// `pairs` when they are readied ([`Pairs::ready_for_step`]). `None` when there is nothing
@@ -113,10 +121,10 @@ impl<'a> InSolve<'a> {
     }
 
     /// Free particle `i`'s iterate `x`, which the step moves from `from`, put back out of the
-    /// obstacles and the ground, with friction on its slide. Returns the normal of the last
-    /// surface it touched, if any.
+    /// obstacles and the ground, with friction on its slide. Returns the last surface it
+    /// touched, if any.
     #[inline]
-    pub(crate) fn keep_out(&self, i: usize, x: &mut DVec2, from: DVec2) -> Option<DVec2> {
+    pub(crate) fn keep_out(&self, i: usize, x: &mut DVec2, from: DVec2) -> Option<Held> {
         self.keep_out_noting(i, x, from, 0.0)
     }
 
@@ -130,7 +138,7 @@ impl<'a> InSolve<'a> {
         x: &mut DVec2,
         from: DVec2,
         per_metre: f64,
-    ) -> Option<DVec2> {
+    ) -> Option<Held> {
         if self.obstacles.is_empty() {
             // The ground alone: one comparison for the particles far above it.
             match self.ground {
@@ -140,7 +148,7 @@ impl<'a> InSolve<'a> {
         }
         let heading = self.heading.get(i).copied().unwrap_or(*x - from);
         let (friction, dt) = (self.friction, self.dt);
-        let mut normal = None;
+        let mut held = None;
         let reactions = self.reactions.filter(|_| per_metre != 0.0);
         // Where the particle was before each obstacle's push, to note that push alone.
         let mut mark = *x;
@@ -156,14 +164,56 @@ impl<'a> InSolve<'a> {
                 let n = touched.normal;
                 let surface_shift = touched.surface_velocity * dt;
                 hold(x, from, surface_shift, n, touched.depth, friction);
-                normal = Some(n);
+                held = Some(Held {
+                    normal: n,
+                    obstacle: touched.obstacle,
+                });
                 if let (Some(reactions), Some(o)) = (reactions, touched.obstacle) {
-                    reactions.note(o, *x - n * r, (*x - mark) * per_metre);
+                    let approach = -(heading - touched.surface_velocity).dot(n);
+                    reactions.note(o, i, *x - n * r, (*x - mark) * per_metre, approach);
                 }
                 mark = *x;
             },
         );
-        normal
+        held
+    }
+
+    /// Whether the contacts' impulses are noted for the obstacles (some stand for bodies).
+    pub(crate) fn notes(&self) -> bool {
+        self.reactions.is_some()
+    }
+
+    /// The part of an impulse `j` on a particle that a contact of outward normal `n` can
+    /// give: a push along n, never a pull, and friction's share of it, at most μ times the
+    /// push. A solve's balance left short of convergence can say a contact pulled.
+    pub(crate) fn push_only(&self, j: DVec2, n: DVec2) -> DVec2 {
+        let push = j.dot(n).max(0.0);
+        let slide = j - n * j.dot(n);
+        let limit = self.friction * push;
+        let length = slide.length();
+        let slide = if length > limit {
+            slide * (limit / length)
+        } else {
+            slide
+        };
+        n * push + slide
+    }
+
+    /// Notes that the obstacle `obstacle` gave free particle `i`, at `x` and pushing along
+    /// `normal`, the impulse `on_particle` over the step (a solve's contact force times dt).
+    pub(crate) fn note(
+        &self,
+        obstacle: usize,
+        i: usize,
+        x: DVec2,
+        normal: DVec2,
+        on_particle: DVec2,
+    ) {
+        if let (Some(r), Some(o)) = (self.reactions, self.obstacles.get(obstacle)) {
+            let heading = self.heading.get(i).copied().unwrap_or_default();
+            let approach = -(heading - o.velocity_at(x)).dot(normal);
+            r.note(obstacle, i, x - normal * self.radius, on_particle, approach);
+        }
     }
 
     /// One Jacobi pass pushing the listed pairs apart in the iterate `x` (inverse masses `w`),
@@ -181,21 +231,21 @@ impl<'a> InSolve<'a> {
     /// The whole iterate: pairs pushed apart, then every free particle kept out of the
     /// surfaces (which wins where the two disagree: a particle pressed into the ground by
     /// another stays on it, and the other moves). `from` is where the step began. Calls
-    /// `each(i, x, normal)` for every free particle where it ends, with the normal of the last
-    /// surface it touched.
+    /// `each(i, x, held)` for every free particle where it ends, with the last surface it
+    /// touched.
     pub(crate) fn project(
         &self,
         x: &mut [DVec2],
         from: &[DVec2],
         w: &[f64],
         scratch: &mut [DVec2],
-        mut each: impl FnMut(usize, DVec2, Option<DVec2>),
+        mut each: impl FnMut(usize, DVec2, Option<Held>),
     ) {
         self.separate(x, w, scratch);
         for (i, ((x, &from), &w)) in x.iter_mut().zip(from).zip(w).enumerate() {
             if w != 0.0 {
-                let normal = self.keep_out(i, x, from);
-                each(i, *x, normal);
+                let held = self.keep_out(i, x, from);
+                each(i, *x, held);
             }
         }
     }
@@ -241,7 +291,16 @@ pub struct Support {
     last: Vec<DVec2>,
     /// The iterate before this projection.
     before: Vec<DVec2>,
+    /// The obstacle whose surface last held each particle ([`NO_OBSTACLE`]: the ground, a
+    /// pair, or none), and the push of the last projection.
+    obstacle: Vec<u32>,
+    push: Vec<DVec2>,
+    /// The last projection's s/ĥ².
+    stiffness: f64,
 }
+
+/// No obstacle holds the particle.
+const NO_OBSTACLE: u32 = u32::MAX;
 
 impl Support {
     /// Readies the buffers for a step of the state's particles starting from `start`, with no
@@ -262,6 +321,31 @@ impl Support {
         }
         self.last.clear();
         self.last.extend_from_slice(start);
+        self.obstacle.clear();
+        self.obstacle.resize(start.len(), NO_OBSTACLE);
+        self.push.clear();
+        self.push.resize(start.len(), DVec2::ZERO);
+    }
+
+    /// Notes, for the obstacles that stand for bodies, the impulse each gave its particles
+    /// in the step ([`super::reaction`]): the contact force of the solve's equation after its
+    /// last projection (the learned force, less the over-relaxation of the last push) times
+    /// the equation's step `h`, M (z − y)/h² = f. That is the momentum the contact gave the
+    /// particle: h = dt under projective dynamics and implicit Euler; h = 2/3 dt under BDF2,
+    /// whose history forgets a held particle's jump, so that no later step carries a third of
+    /// it again.
+    pub(crate) fn note_reactions(&self, c: &InSolve, mass: &[f64], h: f64) {
+        if !c.notes() {
+            return;
+        }
+        for (i, f) in self.force.iter().enumerate() {
+            let o = self.obstacle[i];
+            if *f == DVec2::ZERO || o == NO_OBSTACLE {
+                continue;
+            }
+            let held = *f - self.push[i] * ((self.gain[i] - 1.0) * self.stiffness * mass[i]);
+            c.note(o as usize, i, self.last[i], self.normal[i], held * h);
+        }
     }
 
     /// The normal of the contact holding particle `i` at the end of the last solve, if one
@@ -299,19 +383,29 @@ impl Support {
     ) {
         self.before.clear();
         self.before.extend_from_slice(x);
+        self.stiffness = stiffness;
         let Support {
             force,
             gain,
             normal,
             last,
             before,
+            obstacle,
+            push: pushed,
+            ..
         } = self;
-        c.project(x, from, w, scratch, |i, x, surface| {
+        c.project(x, from, w, scratch, |i, x, held| {
             let push = x - before[i];
             // The surface's normal, or a pair's push when no surface touched the particle.
-            if let Some(n) = surface.or_else(|| push.try_normalize()) {
+            if let Some(n) = held.map(|h| h.normal).or_else(|| push.try_normalize()) {
                 normal[i] = n;
             }
+            if let Some(h) = held {
+                obstacle[i] = h.obstacle.map_or(NO_OBSTACLE, |o| o as u32);
+            } else if push != DVec2::ZERO {
+                obstacle[i] = NO_OBSTACLE;
+            }
+            pushed[i] = push;
             let f = &mut force[i];
             if push != DVec2::ZERO {
                 *f += push * (gain[i] * stiffness * mass[i]);

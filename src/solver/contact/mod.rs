@@ -17,4 +17,4 @@ mod pass;
 pub mod reaction;
 
 pub use pass::{ContactSettings, Surroundings, collide, moves_with_drift, settle};
-pub use reaction::{Reaction, Reactions};
+pub use reaction::{Inertia, Reaction, Reactions};

@@ -85,6 +85,8 @@ pub struct Surroundings<'a> {
     pub settings: Option<ContactSettings>,
     /// Where the particles' contacts note the impulse each obstacle takes back, when some
     /// obstacle stands for a body that feels them ([`super::reaction`]); `None` otherwise.
+    /// The caller ends each step with [`Reactions::close_step`], which gives the bodies'
+    /// masses their part.
     pub reactions: Option<&'a Reactions>,
 }
 
@@ -168,7 +170,7 @@ pub fn collide(
     // the surface moving at surface_velocity): friction on the step's sliding, then the
     // velocity's response.
     let reactions = around.reactions;
-    let grip = |x: &mut DVec2, v: &mut DVec2, w: f64, from, touched: Touched| {
+    let grip = |i: usize, x: &mut DVec2, v: &mut DVec2, w: f64, from, touched: Touched| {
         let Touched {
             normal: n,
             depth,
@@ -179,10 +181,11 @@ pub fn collide(
         let before = *v;
         *v = respond(*v, surface_velocity, n, surface);
         if let (Some(reactions), Some(o)) = (reactions, obstacle) {
-            reactions.note(o, *x - n * r, (*v - before) / w);
+            let approach = -(before - surface_velocity).dot(n);
+            reactions.note(o, i, *x - n * r, (*v - before) / w, approach);
         }
     };
-    let one = |x: &mut DVec2, v: &mut DVec2, u: DVec2, w: f64| -> usize {
+    let one = |i: usize, x: &mut DVec2, v: &mut DVec2, u: DVec2, w: f64| -> usize {
         if w == 0.0 {
             return 0;
         }
@@ -191,29 +194,35 @@ pub fn collide(
         let from = *x - u * dt;
         let heading = if *x != from { *x - from } else { *v };
         place(x, from, heading, obstacles, r, ground, |x, touched| {
-            grip(x, v, w, from, touched)
+            grip(i, x, v, w, from, touched)
         })
     };
     // The path's velocity: the drift's, or the end velocity itself (read before it changes).
-    let part = |x: &mut [DVec2], v: &mut [DVec2], u: Option<&[DVec2]>, w: &[f64]| {
+    // `at` holds the particles' indices in the whole state, for the notes.
+    let part = |at: std::ops::Range<usize>,
+                x: &mut [DVec2],
+                v: &mut [DVec2],
+                u: Option<&[DVec2]>,
+                w: &[f64]| {
         let mut n = 0;
-        for i in 0..x.len() {
-            let ui = u.map_or(v[i], |u| u[i]);
-            n += one(&mut x[i], &mut v[i], ui, w[i]);
+        for (k, i) in at.enumerate() {
+            let uk = u.map_or(v[k], |u| u[k]);
+            n += one(i, &mut x[k], &mut v[k], uk, w[k]);
         }
         n
     };
+    let all = 0..x.len();
     match u {
         Some(u) => threads.chunked(
             springs,
-            (&mut x[..], &mut v[..], u, w),
-            |(x, v, u, w)| part(x, v, Some(u), w),
+            (all, &mut x[..], &mut v[..], u, w),
+            |(at, x, v, u, w)| part(at, x, v, Some(u), w),
             |a, b| a + b,
         ),
         None => threads.chunked(
             springs,
-            (&mut x[..], &mut v[..], w),
-            |(x, v, w)| part(x, v, None, w),
+            (all, &mut x[..], &mut v[..], w),
+            |(at, x, v, w)| part(at, x, v, None, w),
             |a, b| a + b,
         ),
     }
@@ -244,7 +253,7 @@ pub fn settle(
         around.surface(dt, gravity),
     );
     let (obstacles, reactions) = (around.obstacles, around.reactions);
-    let one = |x: DVec2, v: &mut DVec2, pre: DVec2, w: f64| -> usize {
+    let one = |i: usize, x: DVec2, v: &mut DVec2, pre: DVec2, w: f64| -> usize {
         if w == 0.0 {
             return 0;
         }
@@ -266,7 +275,7 @@ pub fn settle(
             let normal = if before < 0.0 { bounce } else { end.max(0.0) };
             *v += n * (normal - end);
             if let (Some(reactions), Some(o)) = (reactions, obstacle) {
-                reactions.note(o, x - n * r, n * ((normal - end) / w));
+                reactions.note(o, i, x - n * r, n * ((normal - end) / w), -before);
             }
             contacts += 1;
         };
@@ -288,11 +297,11 @@ pub fn settle(
     };
     threads.chunked(
         springs,
-        (x, &mut v[..], pre, w),
-        |(x, v, pre, w)| {
+        (0..x.len(), x, &mut v[..], pre, w),
+        |(at, x, v, pre, w)| {
             let mut n = 0;
-            for i in 0..x.len() {
-                n += one(x[i], &mut v[i], pre[i], w[i]);
+            for (k, i) in at.enumerate() {
+                n += one(i, x[k], &mut v[k], pre[k], w[k]);
             }
             n
         },

@@ -173,6 +173,9 @@ pub fn implicit_euler(
         newton_step(s, sc, dt, linear, contact, threads);
     }
     let sc = &mut *sc;
+    if let Some(c) = contact {
+        sc.support.note_reactions(c, &s.mass, dt);
+    }
     if newton > 1 {
         sc.cg.dv.copy_from_slice(&sc.sum_u);
     }

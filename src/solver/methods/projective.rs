@@ -650,6 +650,10 @@ impl Projective {
                 (self.support).project(c, &mut self.z, &s.x, m, w, scratch, stiffness);
             }
         }
+        if let Some(c) = contact {
+            // The force over the equation's own step ĥ: dt here, 2/3 dt under BDF2.
+            self.support.note_reactions(c, &s.mass, t.h);
+        }
         self.iterations += iterations as u64;
         self.steps += 1;
     }

@@ -65,6 +65,9 @@ pub struct Vbd {
     before: Vec<DVec2>,
     previous: Vec<DVec2>,
     gas: Vec<DVec2>,
+    /// Each vertex's last contact force from a body, and the body's obstacle (when noted).
+    held: Vec<DVec2>,
+    held_by: Vec<u32>,
     /// The start-of-step velocity of the last step and the edits it was under (for the
     /// adaptive initialisation).
     last_v: Vec<DVec2>,
@@ -185,6 +188,9 @@ pub struct Settings {
     pub chebyshev: f64,
 }
 
+/// No body's obstacle holds the vertex.
+const NO_BODY: u32 = u32::MAX;
+
 /// What one vertex's block step reads.
 #[derive(Clone, Copy)]
 struct Block<'a> {
@@ -196,22 +202,25 @@ struct Block<'a> {
     dashpot: &'a [f64],
     /// Contact inside the solve: each vertex step's result is kept out of the surfaces.
     contact: Option<&'a InSolve<'a>>,
+    /// When the contacts are noted for bodies: each vertex's last contact force H δ (its
+    /// block's Hessian times the push) and the obstacle that gave it ([`NO_BODY`]: none).
+    held: Option<(Shared<DVec2>, Shared<u32>)>,
     /// s/h² and 1/h.
     inertia: f64,
     inv_h: f64,
 }
 
 impl Block<'_> {
-    /// Vertex i's Newton step on G with the others held (see the module docs), from `x`.
-    ///
-    /// # Safety
-    /// No other thread writes vertex i or its neighbours while this runs (the colouring's
-    /// promise).
+    /// Vertex i's force at the iterate `x` (the inertia's pull toward y, the springs', the
+    /// gas's: minus the gradient of G) and G's Hessian there, [h00, h01, h11].
     #[inline(always)]
-    unsafe fn relax<const DASHPOTS: bool>(&self, i: usize, x: Shared<DVec2>) {
+    fn force<const DASHPOTS: bool>(
+        &self,
+        i: usize,
+        x: impl Fn(usize) -> DVec2,
+    ) -> (DVec2, [f64; 3]) {
         let s = self.s;
-        // SAFETY: the caller's.
-        let xi = unsafe { x.get(i) };
+        let xi = x(i);
         let mi = s.mass[i] * self.inertia;
         let mut f = (self.y[i] - xi) * mi;
         let (mut h00, mut h01, mut h11) = (mi, 0.0, mi);
@@ -219,8 +228,7 @@ impl Block<'_> {
         let (a, b) = (self.vbd_adj_start[i], self.vbd_adj_start[i + 1]);
         for e in &self.adjacency[a as usize..b as usize] {
             let j = e.other as usize;
-            // SAFETY: the caller's: a neighbour is of another colour, not written now.
-            let xj = unsafe { x.get(j) };
+            let xj = x(j);
             let d = xi - xj;
             let l2 = d.length_squared();
             if l2 == 0.0 {
@@ -247,6 +255,20 @@ impl Block<'_> {
         if let Some(gas) = self.gas {
             f += gas[i];
         }
+        (f, [h00, h01, h11])
+    }
+
+    /// Vertex i's Newton step on G with the others held (see the module docs), from `x`.
+    ///
+    /// # Safety
+    /// No other thread writes vertex i or its neighbours while this runs (the colouring's
+    /// promise).
+    #[inline(always)]
+    unsafe fn relax<const DASHPOTS: bool>(&self, i: usize, x: Shared<DVec2>) {
+        // SAFETY: the caller's: vertex i and its neighbours are not written now.
+        let (f, [h00, h01, h11]) = self.force::<DASHPOTS>(i, |j| unsafe { x.get(j) });
+        // SAFETY: the caller's.
+        let xi = unsafe { x.get(i) };
         let det = h00 * h11 - h01 * h01;
         let trace = h00 + h11;
         // (Written so that a NaN determinant skips too.)
@@ -259,7 +281,20 @@ impl Block<'_> {
             // Projected block descent: the vertex's constraints (the obstacles, the ground)
             // are its own, so holding each step's result to them descends on the constrained
             // objective.
-            c.keep_out(i, &mut end, self.s.x[i]);
+            let free = end;
+            let touched = c.keep_out(i, &mut end, self.s.x[i]);
+            if let Some((force, by)) = self.held {
+                let d = end - free;
+                let push = DVec2::new(h00 * d.x + h01 * d.y, h01 * d.x + h11 * d.y);
+                let o = touched
+                    .and_then(|t| t.obstacle)
+                    .map_or(NO_BODY, |o| o as u32);
+                // SAFETY: the caller's: vertex i is this thread's alone now.
+                unsafe {
+                    force.set(i, if o == NO_BODY { DVec2::ZERO } else { push });
+                    by.set(i, o);
+                }
+            }
         }
         // SAFETY: the caller's.
         unsafe { x.set(i, end) };
@@ -355,9 +390,18 @@ pub fn step(
         gas: None,
         dashpot: s.materials.dashpot(),
         contact,
+        held: None,
         inertia: scale / h2,
         inv_h: 1.0 / dt,
     };
+    let notes = contact.is_some_and(|c| c.notes());
+    let held_len = if notes { n } else { 0 };
+    vb.held.clear();
+    vb.held.resize(held_len, DVec2::ZERO);
+    vb.held_by.clear();
+    vb.held_by.resize(held_len, NO_BODY);
+    let held = notes.then(|| (Shared::new(&mut vb.held), Shared::new(&mut vb.held_by)));
+    let block = Block { held, ..block };
     let dashpots = s.materials.has_dashpots();
     let (x, gas) = (Shared::new(&mut vb.x), Shared::new(&mut vb.gas));
     let (before, previous) = (Shared::new(&mut vb.before), Shared::new(&mut vb.previous));
@@ -444,6 +488,19 @@ pub fn step(
             }
         }
     });
+    if let Some(c) = contact.filter(|c| c.notes()) {
+        // What the obstacles that stand for bodies gave their vertices in the last sweep: the
+        // force that held each at its push, H δ, over h/s (at convergence the vertex's whole
+        // balance; short of it, what the contact did, never a pull).
+        for i in 0..n {
+            let o = vb.held_by[i];
+            if o != NO_BODY && s.inv_mass[i] != 0.0 {
+                let j = vb.held[i] * h_over_s;
+                let normal = j.normalize_or_zero();
+                c.note(o as usize, i, vb.x[i], normal, c.push_only(j, normal));
+            }
+        }
+    }
     let inv_h = 1.0 / dt;
     let data = (&mut s.v[..], &vb.x[..], &s.x[..], &s.inv_mass[..]);
     threads.each(springs, data, |(v, x, x0, w)| {

@@ -324,6 +324,18 @@ impl<T: Send> Split for &mut [T] {
     }
 }
 
+/// The particles' indices, cut with their arrays: a pass that must name a particle by its
+/// index in the whole state (to note it) reads it from here.
+impl Split for std::ops::Range<usize> {
+    fn len(&self) -> usize {
+        self.end - self.start
+    }
+    fn split_at(self, mid: usize) -> (Self, Self) {
+        let cut = self.start + mid;
+        (self.start..cut, cut..self.end)
+    }
+}
+
 macro_rules! split_tuple {
     ($($t:ident $v:ident $l:ident $r:ident),+) => {
         impl<$($t: Split),+> Split for ($($t,)+) {
