@@ -370,15 +370,18 @@ fn a_trampoline_carries_a_box() {
     assert!(y < 0.6 && y > 0.3, "the box rests on the cloth: y = {y}");
 }
 
-/// A heavy box (10 kg) on a light cloth (0.8 g a particle): the cloth sags and holds it, and
-/// nothing goes non-finite or through.
-#[test]
-#[ignore = "not met: 10 kg on 0.8 g of cloth falls through it (docs/library.md)"]
-fn a_heavy_box_on_a_light_cloth_stays_above_it() {
-    let mut app = coupled(Integrator::Xpbd, 1.0 / 60.0, Vec2::new(0.0, -9.81));
+/// A mass ratio of 1000:1: a 10 kg box dropped on a strip of cloth of 10 g in all, at a
+/// frame's step. Nothing goes non-finite and the box never passes through: every particle under
+/// it stays below its bottom face (to the radius and a step of the box's travel, which the
+/// particles meet a step late). Returns how far the worst particle got above the face, m, and
+/// where the box ended.
+fn heavy_box_on_light_cloth(integrator: Integrator) -> (f64, f32) {
+    let dt = 1.0 / 60.0;
+    let mut app = coupled(integrator, dt, Vec2::new(0.0, -9.81));
     app.world_mut().resource_mut::<SimParams>().damping = 5.0;
     let w = app.world_mut();
-    trampoline(w, 21, 0.5, 0.0008, 1e4);
+    let (columns, cloth) = (21, 0.010);
+    trampoline(w, columns, 0.5, cloth / (2 * columns) as f64, 1e4);
     let body = w
         .spawn((
             RigidBody::Dynamic,
@@ -387,22 +390,59 @@ fn a_heavy_box_on_a_light_cloth_stays_above_it() {
             Position(Vec2::new(0.5, 0.6)),
         ))
         .id();
-    for frame in 0..300 {
+    let mut worst: f64 = f64::NEG_INFINITY;
+    for _ in 0..300 {
         app.update();
         let s = app.world().resource::<Solver>();
-        let bottom = app.world().get::<Position>(body).unwrap().0.y as f64 - 0.05;
-        assert!(bottom.is_finite() && s.x().iter().all(|p| p.is_finite()));
-        // The cloth's particles under the box stay below its bottom face.
-        let x = app.world().get::<Position>(body).unwrap().0.x as f64;
+        let at = app.world().get::<Position>(body).unwrap().0.as_dvec2();
+        let bottom = at.y - 0.05;
+        assert!(
+            bottom.is_finite() && s.x().iter().all(|p| p.is_finite()),
+            "{integrator}: not finite"
+        );
+        let lag = body_velocity(&app, body).length() * dt;
         for p in s.x() {
-            if (p.x - x).abs() < 0.08 {
-                assert!(
-                    p.y < bottom + 0.001,
-                    "frame {frame}: a particle at {p} is inside the box (bottom {bottom}), box moving {}",
-                    body_velocity(&app, body)
-                );
+            if (p.x - at.x).abs() < 0.08 {
+                worst = worst.max(p.y - (bottom + lag));
             }
         }
+    }
+    let y = app.world().get::<Position>(body).unwrap().0.y;
+    println!(
+        "{integrator}: a particle at most {worst:.4} m above the box's bottom; the box at y = {y}"
+    );
+    (worst, y)
+}
+
+/// VBD holds the 1000:1 box: its contact force is its block's Hessian times the push, which
+/// carries the springs' stiffness, not only the particle's mass.
+#[test]
+fn a_heavy_box_on_a_light_cloth_stays_above_it() {
+    let (worst, y) = heavy_box_on_light_cloth(Integrator::Vbd);
+    assert!(
+        worst < 0.005 + 1e-3 && y > 0.2,
+        "a particle {worst} m inside the box, the box at y = {y}"
+    );
+}
+
+/// The other large-step methods let the 1000:1 box through: their contact's push carries only
+/// what the light particle's mass moves in a step (XPBD's m δ/hₛ; projective dynamics', implicit
+/// Euler's and BDF2's learned force, at most 4 m δ/ĥ² an iteration), far less than the cloth's
+/// springs would give.
+#[test]
+#[ignore = "not met: XPBD, projective dynamics, implicit Euler and BDF2 let it through (docs/library.md)"]
+fn a_heavy_box_on_a_light_cloth_stays_above_it_under_every_method() {
+    for integrator in [
+        Integrator::Xpbd,
+        Integrator::ProjectiveDynamics,
+        Integrator::ImplicitEuler,
+        Integrator::Bdf2,
+    ] {
+        let (worst, y) = heavy_box_on_light_cloth(integrator);
+        assert!(
+            worst < 0.005 + 1e-3 && y > 0.2,
+            "{integrator}: a particle {worst} m inside the box, the box at y = {y}"
+        );
     }
 }
 

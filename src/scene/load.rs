@@ -201,15 +201,17 @@ fn despawn_contents(world: &mut World, params: SimParams) {
     world.insert_resource(Solver::default());
 }
 
-/// Despawns every obstacle and spawns the scene's, in its order.
-pub fn replace_obstacles(world: &mut World, obstacles: &[super::format::ObstacleDef]) {
-    let old: Vec<Entity> = world
-        .query_filtered::<Entity, With<Obstacle>>()
-        .iter(world)
-        .collect();
+/// Despawns every entity that `F` selects (a scene's obstacles, its bodies).
+pub(crate) fn despawn_all<F: bevy::ecs::query::QueryFilter>(world: &mut World) {
+    let old: Vec<Entity> = world.query_filtered::<Entity, F>().iter(world).collect();
     for e in old {
         world.despawn(e);
     }
+}
+
+/// Despawns every obstacle and spawns the scene's, in its order.
+pub fn replace_obstacles(world: &mut World, obstacles: &[super::format::ObstacleDef]) {
+    despawn_all::<With<Obstacle>>(world);
     // Validated before: a polygon that does not make one is not in a loaded scene.
     for placed in obstacles.iter().filter_map(|o| o.placed().ok()) {
         world.spawn((

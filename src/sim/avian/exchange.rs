@@ -3,7 +3,7 @@
 //! their bodies' points before the step.
 
 use super::{Coupling, Motion, centre_of_mass};
-use crate::sim::components::{Kinematic, Position as ParticlePosition, Velocity};
+use crate::sim::components::{Kinematic, Position as ParticlePosition, SolverIndex, Velocity};
 use crate::sim::obstacles::Obstacles;
 use crate::sim::params::SimParams;
 use crate::sim::solver::Solver;
@@ -66,23 +66,29 @@ pub(super) fn follow(
     }
 }
 
-/// The pull of particle `i`'s springs at the state's positions, N: each stretched spring pulls
-/// toward its other end.
-fn pull_on(solver: &Solver, i: u32) -> DVec2 {
+/// The pull of the springs on each of the particles `ends` (solver indices, sorted), at the
+/// state's positions, N: each stretched spring pulls toward its other end. One pass over the
+/// springs for all the attachments, each end found by a binary search.
+fn pulls_on(solver: &Solver, ends: &[u32]) -> Vec<DVec2> {
     let x = solver.x();
-    let mut f = DVec2::ZERO;
+    let mut f = vec![DVec2::ZERO; ends.len()];
     for s in solver.springs() {
-        let other = if s.a == i {
-            s.b
-        } else if s.b == i {
-            s.a
-        } else {
+        let (a, b) = (ends.binary_search(&s.a), ends.binary_search(&s.b));
+        if a.is_err() && b.is_err() {
             continue;
-        };
-        let d = x[other as usize] - x[i as usize];
+        }
+        let d = x[s.b as usize] - x[s.a as usize];
         let l = d.length();
-        if l > 0.0 {
-            f += d * (s.k * (l - s.rest) / l);
+        if l == 0.0 {
+            continue;
+        }
+        // On a, toward b when stretched; on b, the opposite.
+        let on_a = d * (s.k * (l - s.rest) / l);
+        if let Ok(k) = a {
+            f[k] += on_a;
+        }
+        if let Ok(k) = b {
+            f[k] -= on_a;
         }
     }
     f
@@ -96,7 +102,7 @@ pub(super) fn push(
     mut coupling: ResMut<Coupling>,
     solver: Res<Solver>,
     params: Res<SimParams>,
-    attached: Query<(Entity, &Attachment)>,
+    attached: Query<(Entity, &Attachment, &SolverIndex)>,
     owners: Query<&ColliderOf>,
     kinds: Query<&RigidBody>,
     mut forces: Query<(Forces, &ComputedCenterOfMass)>,
@@ -120,14 +126,19 @@ pub(super) fn push(
         add(body, r.impulse, r.moment);
     }
     if !attached.is_empty() {
-        let entities = solver.entities();
-        for (e, a) in &attached {
-            let Some(i) = entities.iter().position(|p| *p == e) else {
-                continue;
-            };
-            let at = solver.x()[i];
-            let j = pull_on(&solver, i as u32) * params.dt;
-            add(a.body, j, at.perp_dot(j));
+        // Each attached particle's solver index (not yet packed: not pulling yet).
+        let mut ends: Vec<(u32, Entity)> = attached
+            .iter()
+            .filter(|(_, _, i)| (i.0 as usize) < solver.x().len())
+            .map(|(_, a, i)| (i.0, a.body))
+            .collect();
+        ends.sort_unstable_by_key(|(i, _)| *i);
+        let indices: Vec<u32> = ends.iter().map(|(i, _)| *i).collect();
+        let pulls = pulls_on(&solver, &indices);
+        for ((i, body), pull) in ends.into_iter().zip(pulls) {
+            let at = solver.x()[i as usize];
+            let j = pull * params.dt;
+            add(body, j, at.perp_dot(j));
         }
     }
     for (body, impulse, moment) in totals {
