@@ -37,11 +37,6 @@ pub fn replace_bodies(world: &mut World, bodies: &[BodyDef], gravity: DVec2) {
     for def in bodies {
         spawn_body(world, def);
     }
-    // The steps note the contacts for the bodies from the first (the coupling's clock keeps
-    // this so after), and the card, which does not run bodies, says so before it is tried.
-    if let Some(mut o) = world.get_resource_mut::<crate::sim::Obstacles>() {
-        o.feel = !bodies.is_empty();
-    }
 }
 
 /// Spawns one rigid body; a shape that makes no collider (which validation refuses first) is

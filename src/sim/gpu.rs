@@ -49,7 +49,9 @@ pub fn unsupported(world: &World) -> Option<String> {
     {
         what.push("convex polygon obstacles".to_string());
     }
-    if obstacles.feel {
+    // The world's bodies, not `feel`, which the first tick's gather sets: a run asks before it.
+    #[cfg(feature = "avian")]
+    if super::avian::has_bodies(world) {
         what.push("obstacles that feel the particles (rigid bodies)".to_string());
     }
     let materials = (!what.is_empty())

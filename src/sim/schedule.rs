@@ -755,7 +755,6 @@ pub fn advance(world: &mut World, steps: u64) -> u64 {
         #[cfg(feature = "avian")]
         if coupled {
             let before = super::avian::enter_tick(world, dt);
-            world.resource_mut::<super::obstacles::Obstacles>().feel = true;
             world.run_schedule(FixedMain);
             *world.resource_mut::<Time>() = before;
             let taken = world.resource::<SimClock>().steps - start;

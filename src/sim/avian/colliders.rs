@@ -142,6 +142,11 @@ pub(super) fn gather(
     let n = substeps.0.max(1) as f64;
     let fall = gravity.0.as_dvec2() * (params.dt * (n + 1.0) / (2.0 * n));
     coupling.colliders = 0;
+    // The steps note the contacts for the bodies while there are any.
+    let feel = !bodies.is_empty();
+    if obstacles.feel != feel {
+        obstacles.feel = feel;
+    }
     let Some((lo, hi)) = particle_bounds(&solver, &params) else {
         return;
     };

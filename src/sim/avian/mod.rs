@@ -37,7 +37,6 @@ mod exchange;
 pub use colliders::{ShapeProblem, obstacle_shapes};
 pub use exchange::Attachment;
 
-use super::obstacles::Obstacles;
 use super::params::{SimParams, SimStatus, TickPlan};
 use super::schedule::PhysicsSystems;
 use avian2d::prelude::*;
@@ -162,14 +161,13 @@ fn centre_of_mass(at: &Position, turn: &Rotation, com: Option<&ComputedCenterOfM
 
 /// One clock: a tick is one step of hooke's dt, avian's time runs only while hooke steps.
 /// Without a rigid body (an app that has the plugin but whose scene has none) nothing is
-/// coupled: hooke's tick is its own again, avian's time stands still, and the steps note no
-/// contact for anyone.
+/// coupled: hooke's tick is its own again and avian's time stands still (and the colliders'
+/// gather leaves the steps noting no contact for anyone).
 fn one_clock(
     params: Res<SimParams>,
     status: Res<SimStatus>,
     bodies: Query<(), With<RigidBody>>,
     mut coupling: ResMut<Coupling>,
-    mut obstacles: ResMut<Obstacles>,
     mut plan: ResMut<TickPlan>,
     mut physics: ResMut<Time<Physics>>,
 ) {
@@ -183,9 +181,6 @@ fn one_clock(
         }
     } else if let Some(own) = coupling.own_tick.take() {
         plan.target_tick_seconds = own;
-    }
-    if obstacles.feel != coupled {
-        obstacles.feel = coupled;
     }
     let running = coupled && !params.paused && *status == SimStatus::Running;
     if running && physics.is_paused() {
@@ -213,13 +208,15 @@ pub(crate) fn enter_tick(world: &mut World, dt: f64) -> Time {
 }
 
 /// Whether rigid bodies are coupled in this world: the plugin is in and some body exists.
-pub(crate) fn coupled(world: &mut World) -> bool {
-    world.contains_resource::<Coupling>()
-        && world
-            .query_filtered::<(), With<RigidBody>>()
-            .iter(world)
-            .next()
-            .is_some()
+pub(crate) fn coupled(world: &World) -> bool {
+    world.contains_resource::<Coupling>() && has_bodies(world)
+}
+
+/// Whether the world has a rigid body.
+pub(crate) fn has_bodies(world: &World) -> bool {
+    world
+        .try_query_filtered::<(), With<RigidBody>>()
+        .is_some_and(|mut q| q.iter(world).next().is_some())
 }
 
 /// One gravity: avian's, copied into hooke's parameters when it differs.

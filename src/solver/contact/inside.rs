@@ -152,7 +152,6 @@ impl<'a> InSolve<'a> {
         let reactions = self.reactions.filter(|_| per_metre != 0.0);
         // Where the particle was before each obstacle's push, to note that push alone.
         let mut mark = *x;
-        let r = self.radius;
         place(
             x,
             from,
@@ -168,9 +167,9 @@ impl<'a> InSolve<'a> {
                     normal: n,
                     obstacle: touched.obstacle,
                 });
-                if let (Some(reactions), Some(o)) = (reactions, touched.obstacle) {
-                    let approach = -(heading - touched.surface_velocity).dot(n);
-                    reactions.note(o, i, *x - n * r, (*x - mark) * per_metre, approach);
+                if let (Some(_), Some(o)) = (reactions, touched.obstacle) {
+                    let impulse = (*x - mark) * per_metre;
+                    self.note(o, i, (*x, n), impulse, Some(touched.surface_velocity));
                 }
                 mark = *x;
             },
@@ -200,20 +199,25 @@ impl<'a> InSolve<'a> {
     }
 
     /// Notes that the obstacle `obstacle` gave free particle `i`, at `x` and pushing along
-    /// `normal`, the impulse `on_particle` over the step (a solve's contact force times dt).
+    /// `normal`, the impulse `on_particle` over the step (a solve's contact force times dt, or a
+    /// push over its substep). `surface_velocity`, the obstacle's where the particle touches
+    /// it (read from the obstacle when `None`), gives the particle's approach: its heading
+    /// toward the surface before contact.
     pub(crate) fn note(
         &self,
         obstacle: usize,
         i: usize,
-        x: DVec2,
-        normal: DVec2,
+        (x, normal): (DVec2, DVec2),
         on_particle: DVec2,
+        surface_velocity: Option<DVec2>,
     ) {
-        if let (Some(r), Some(o)) = (self.reactions, self.obstacles.get(obstacle)) {
-            let heading = self.heading.get(i).copied().unwrap_or_default();
-            let approach = -(heading - o.velocity_at(x)).dot(normal);
-            r.note(obstacle, i, x - normal * self.radius, on_particle, approach);
-        }
+        let (Some(r), Some(o)) = (self.reactions, self.obstacles.get(obstacle)) else {
+            return;
+        };
+        let surface_velocity = surface_velocity.unwrap_or_else(|| o.velocity_at(x));
+        let heading = self.heading.get(i).copied().unwrap_or(DVec2::ZERO);
+        let approach = -(heading - surface_velocity).dot(normal);
+        r.note(obstacle, i, x - normal * self.radius, on_particle, approach);
     }
 
     /// One Jacobi pass pushing the listed pairs apart in the iterate `x` (inverse masses `w`),
@@ -344,7 +348,13 @@ impl Support {
                 continue;
             }
             let held = *f - self.push[i] * ((self.gain[i] - 1.0) * self.stiffness * mass[i]);
-            c.note(o as usize, i, self.last[i], self.normal[i], held * h);
+            c.note(
+                o as usize,
+                i,
+                (self.last[i], self.normal[i]),
+                held * h,
+                None,
+            );
         }
     }
 

@@ -114,6 +114,7 @@ impl Reactions {
     /// Notes that a contact of particle `particle` with obstacle `obstacle` at the surface
     /// point `point` changed the particle's momentum by `on_particle`: the obstacle takes
     /// minus that.
+    ///
     /// `approach` is the particle's speed toward the surface before the contact (m/s, ≥ 0):
     /// the part of the impulse that stopped it is an impact's, which the body's mass shares
     /// ([`Self::close_step`]); the rest held it against its other forces. A wall's contacts (an
@@ -171,15 +172,12 @@ impl Reactions {
         }
         notes.sort_unstable_by_key(Note::key);
         // Runs of one obstacle, and within them runs of one particle.
-        let mut start = 0;
-        while start < notes.len() {
-            let o = notes[start].obstacle;
-            let end = start + notes[start..].partition_point(|n| n.obstacle == o);
-            let body = self.inertia.get(o as usize).copied().unwrap_or_default();
+        for run in runs(notes, |n| n.obstacle) {
+            let o = notes[run.start].obstacle as usize;
+            let body = self.inertia.get(o).copied().unwrap_or_default();
             if !body.is_wall() {
-                share(&mut notes[start..end], body, v, w);
+                share(&mut notes[run], body, v, w);
             }
-            start = end;
         }
         for n in notes.drain(..) {
             if let Some(r) = self.summed.get_mut(n.obstacle as usize) {
@@ -200,6 +198,19 @@ impl Reactions {
         let n = self.summed.len();
         std::mem::replace(&mut self.summed, vec![Reaction::default(); n])
     }
+}
+
+/// The runs of `notes` (sorted by `key` first) that share a key, in order.
+fn runs<K: PartialEq>(notes: &[Note], key: impl Fn(&Note) -> K) -> Vec<std::ops::Range<usize>> {
+    let mut all = vec![];
+    let mut start = 0;
+    while let Some(first) = notes.get(start) {
+        let k = key(first);
+        let end = start + notes[start..].partition_point(|n| key(n) == k);
+        all.push(start..end);
+        start = end;
+    }
+    all
 }
 
 /// One moving body's notes of a step (sorted, so each particle's are together). A particle's
@@ -227,21 +238,19 @@ fn share(notes: &mut [Note], body: Inertia, v: &mut [DVec2], w: &[f64]) {
         /// The part of the impulse cut, N·s (along −P).
         cut: f64,
     }
-    let mut runs = vec![];
-    let mut start = 0;
-    while start < notes.len() {
-        let i = notes[start].particle;
-        let end = start + notes[start..].partition_point(|n| n.particle == i);
-        let group = &notes[start..end];
-        runs.push(Run {
-            notes: start..end,
-            particle: i as usize,
-            on_particle: -group.iter().map(|n| n.impulse).sum::<DVec2>(),
-            point: group.iter().map(|n| n.point).sum::<DVec2>() / group.len() as f64,
-            cut: 0.0,
-        });
-        start = end;
-    }
+    let mut runs: Vec<Run> = runs(notes, |n| n.particle)
+        .into_iter()
+        .map(|range| {
+            let group = &notes[range.clone()];
+            Run {
+                particle: group[0].particle as usize,
+                on_particle: -group.iter().map(|n| n.impulse).sum::<DVec2>(),
+                point: group.iter().map(|n| n.point).sum::<DVec2>() / group.len() as f64,
+                notes: range,
+                cut: 0.0,
+            }
+        })
+        .collect();
     let k = runs.len() as f64;
     // The cuts, and the body's change of motion under what the particles give it.
     let (mut impulse, mut moment) = (DVec2::ZERO, 0.0);

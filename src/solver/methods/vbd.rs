@@ -211,16 +211,16 @@ struct Block<'a> {
 }
 
 impl Block<'_> {
-    /// Vertex i's force at the iterate `x` (the inertia's pull toward y, the springs', the
-    /// gas's: minus the gradient of G) and G's Hessian there, [h00, h01, h11].
+    /// Vertex i's Newton step on G with the others held (see the module docs), from `x`.
+    ///
+    /// # Safety
+    /// No other thread writes vertex i or its neighbours while this runs (the colouring's
+    /// promise).
     #[inline(always)]
-    fn force<const DASHPOTS: bool>(
-        &self,
-        i: usize,
-        x: impl Fn(usize) -> DVec2,
-    ) -> (DVec2, [f64; 3]) {
+    unsafe fn relax<const DASHPOTS: bool>(&self, i: usize, x: Shared<DVec2>) {
         let s = self.s;
-        let xi = x(i);
+        // SAFETY: the caller's.
+        let xi = unsafe { x.get(i) };
         let mi = s.mass[i] * self.inertia;
         let mut f = (self.y[i] - xi) * mi;
         let (mut h00, mut h01, mut h11) = (mi, 0.0, mi);
@@ -228,7 +228,8 @@ impl Block<'_> {
         let (a, b) = (self.vbd_adj_start[i], self.vbd_adj_start[i + 1]);
         for e in &self.adjacency[a as usize..b as usize] {
             let j = e.other as usize;
-            let xj = x(j);
+            // SAFETY: the caller's: a neighbour is of another colour, not written now.
+            let xj = unsafe { x.get(j) };
             let d = xi - xj;
             let l2 = d.length_squared();
             if l2 == 0.0 {
@@ -255,20 +256,6 @@ impl Block<'_> {
         if let Some(gas) = self.gas {
             f += gas[i];
         }
-        (f, [h00, h01, h11])
-    }
-
-    /// Vertex i's Newton step on G with the others held (see the module docs), from `x`.
-    ///
-    /// # Safety
-    /// No other thread writes vertex i or its neighbours while this runs (the colouring's
-    /// promise).
-    #[inline(always)]
-    unsafe fn relax<const DASHPOTS: bool>(&self, i: usize, x: Shared<DVec2>) {
-        // SAFETY: the caller's: vertex i and its neighbours are not written now.
-        let (f, [h00, h01, h11]) = self.force::<DASHPOTS>(i, |j| unsafe { x.get(j) });
-        // SAFETY: the caller's.
-        let xi = unsafe { x.get(i) };
         let det = h00 * h11 - h01 * h01;
         let trace = h00 + h11;
         // (Written so that a NaN determinant skips too.)
@@ -382,6 +369,14 @@ pub fn step(
     vb.before.resize(if chebyshev { n } else { 0 }, DVec2::ZERO);
     vb.previous
         .resize(if chebyshev { n } else { 0 }, DVec2::ZERO);
+    // Each vertex's last contact force, when the contacts are noted for bodies.
+    let notes = contact.is_some_and(|c| c.notes());
+    let held_len = if notes { n } else { 0 };
+    vb.held.clear();
+    vb.held.resize(held_len, DVec2::ZERO);
+    vb.held_by.clear();
+    vb.held_by.resize(held_len, NO_BODY);
+    let held = notes.then(|| (Shared::new(&mut vb.held), Shared::new(&mut vb.held_by)));
     let block = Block {
         s,
         vbd_adj_start: &vb.adjacency_start,
@@ -390,18 +385,10 @@ pub fn step(
         gas: None,
         dashpot: s.materials.dashpot(),
         contact,
-        held: None,
+        held,
         inertia: scale / h2,
         inv_h: 1.0 / dt,
     };
-    let notes = contact.is_some_and(|c| c.notes());
-    let held_len = if notes { n } else { 0 };
-    vb.held.clear();
-    vb.held.resize(held_len, DVec2::ZERO);
-    vb.held_by.clear();
-    vb.held_by.resize(held_len, NO_BODY);
-    let held = notes.then(|| (Shared::new(&mut vb.held), Shared::new(&mut vb.held_by)));
-    let block = Block { held, ..block };
     let dashpots = s.materials.has_dashpots();
     let (x, gas) = (Shared::new(&mut vb.x), Shared::new(&mut vb.gas));
     let (before, previous) = (Shared::new(&mut vb.before), Shared::new(&mut vb.previous));
@@ -497,7 +484,13 @@ pub fn step(
             if o != NO_BODY && s.inv_mass[i] != 0.0 {
                 let j = vb.held[i] * h_over_s;
                 let normal = j.normalize_or_zero();
-                c.note(o as usize, i, vb.x[i], normal, c.push_only(j, normal));
+                c.note(
+                    o as usize,
+                    i,
+                    (vb.x[i], normal),
+                    c.push_only(j, normal),
+                    None,
+                );
             }
         }
     }
