@@ -842,6 +842,24 @@ fn every_control_works_under_real_input_and_the_log_stays_quiet() {
     s.expect("the grab on the card over", |st| {
         st["held"] == 0 && st["device"] == "gpu" && counts(st).1 == cut
     });
+    // Untouched, the card's state stays on the card: the steps go on, the positions the
+    // report shows (the solver's) stay, the energy is the card's summary; the pointer moving
+    // brings the state back.
+    std::thread::sleep(Duration::from_secs(2));
+    let quiet = s.status();
+    std::thread::sleep(Duration::from_millis(1500));
+    let later = s.status();
+    assert_eq!(later["state_lags_card"], true, "{later}");
+    assert!(later["steps"].as_u64() > quiet["steps"].as_u64());
+    assert!(
+        positions(&quiet) == positions(&later),
+        "the state came back untouched"
+    );
+    assert!(later["energy"].as_f64().is_some_and(f64::is_finite));
+    s.move_to(0.2, 0.2);
+    s.expect("the state back for the pointer", |st| {
+        positions(st) != positions(&later)
+    });
     s.move_px(95, 179);
     s.x(&["click", "1"]);
     s.expect("drawn on the CPU again", |st| {

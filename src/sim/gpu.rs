@@ -4,16 +4,23 @@
 //! The card runs symplectic and explicit Euler with gravity, external forces, damping, the
 //! ground, pins, dashpots, tearing, the obstacles and the ground's contact with friction and
 //! restitution, and contact between particles; and XPBD (to a fixed count of sweeps) with the
-//! same, its contact inside its substeps as on the CPU ([`crate::solver::gpu`]). A scene that uses anything else stays on the CPU,
-//! and [`unsupported`] says what keeps it there, in words a user reads.
+//! same, its contact inside its substeps as on the CPU ([`crate::solver::gpu`]). A scene that uses
+//! anything else stays on the CPU, and [`unsupported`] says what keeps it there, in words a user
+//! reads. The fixed tick steps there under [`CardStep`], which reads the card's state back each
+//! tick, in the background, or on demand (the app's way: [`CardStep::on_demand`]).
 
 use super::obstacles::Obstacles;
 use super::params::{SimClock, SimParams, SimStatus};
 use super::solver::Solver;
 use super::watch::EnergyPeak;
-use crate::solver::gpu::{ExplicitMethod, ExplicitSettings, Gpu, GpuStep, Precision, TearSettings};
+use crate::solver::gpu::{
+    ExplicitMethod, ExplicitSettings, Gpu, GpuStep, Precision, Summary, TearSettings,
+};
 use crate::solver::method::Integrator;
+use bevy::ecs::change_detection::DetectChangesMut;
 use bevy::ecs::world::World;
+use bevy::math::DVec2;
+use std::time::{Duration, Instant};
 
 /// The most steps recorded into one submit by [`advance_on_gpu`]; the state is read back (and
 /// the energy peak taken) after each.
@@ -112,6 +119,7 @@ fn take_state(world: &mut World, card: &GpuStep, torn: &mut Vec<usize>) -> Resul
         let mut solver = world.resource_mut::<Solver>();
         card.finish_read_into(&mut solver.state)
             .map_err(|e| e.to_string())?;
+        solver.energy_on_card = None;
         for i in card.torn_springs().map_err(|e| e.to_string())? {
             solver.state.springs[i].k = 0.0;
             torn.push(i);
@@ -242,6 +250,15 @@ pub struct CardStep {
     /// card (the app's way); the solver then shows the state one tick behind the card's, and
     /// [`catch_up`] brings it level. Off: each tick waits for its state.
     pub background_reads: bool,
+    /// Read the card's state only when something needs it (the app's way): each tick brings
+    /// back only the card's [`Summary`] (the energy by kind, springs torn, contacts), and the
+    /// card tears the springs itself. The state comes back in the background while reads are
+    /// wanted ([`CardStep::keep_reading`]: the app asks on every input, for picking and
+    /// editing), for [`catch_up`] (saving, a library user's look), before the CPU takes the
+    /// steps back, before an edit of the world goes into the solver, and when springs tore or
+    /// the state blew up. Meanwhile the packed state and the entities lag the card's, and
+    /// [`Solver::energy_now`] gives the card's sum.
+    pub on_demand: bool,
     gpu: Option<Gpu>,
     step: Option<GpuStep>,
     /// What the card's copy was made from: the state's revision, particles and obstacles, the
@@ -253,6 +270,12 @@ pub struct CardStep {
     active: bool,
     /// The last tick's submit time and steps, while its state is read in the background.
     submitted: Option<(std::time::Duration, u64)>,
+    /// Steps ran on the card since the solver last took its state.
+    behind: bool,
+    /// Until when each tick reads the state back ([`CardStep::keep_reading`]).
+    read_until: Option<Instant>,
+    /// The last summary the card sent.
+    summary: Option<Summary>,
 }
 
 impl CardStep {
@@ -261,6 +284,31 @@ impl CardStep {
         self.gpu = Some(gpu);
         self.step = None;
         self.made_for = None;
+    }
+
+    /// With [`CardStep::on_demand`]: read the state back each tick for `span` from now (the
+    /// app asks on every input, so that picking and edits see the state of the tick before).
+    pub fn keep_reading(&mut self, span: Duration) {
+        let until = Instant::now() + span;
+        if self.read_until.is_none_or(|t| t < until) {
+            self.read_until = Some(until);
+        }
+    }
+
+    /// Whether the packed state (and the entities) lag the card's: steps ran there since the
+    /// solver last took its state ([`catch_up`] brings it level).
+    pub fn behind(&self) -> bool {
+        self.behind
+    }
+
+    /// The last [`Summary`] the card sent (with [`CardStep::on_demand`]).
+    pub fn summary(&self) -> Option<Summary> {
+        self.summary
+    }
+
+    /// Whether this tick's state comes back.
+    fn reads_wanted(&self) -> bool {
+        !self.on_demand || self.read_until.is_some_and(|t| Instant::now() < t)
     }
 
     /// The card's name, when one was given.
@@ -291,10 +339,13 @@ impl CardStep {
     }
 
     /// Lets the card's copy of the state go: the next tick on the card uploads it afresh.
+    /// (Whoever calls it brought the solver level first, or the card failed.)
     fn forget_copy(&mut self) {
         self.active = false;
         self.step = None;
         self.made_for = None;
+        self.behind = false;
+        self.summary = None;
     }
 
     /// The precision in use: the one asked for, else f32.
@@ -313,15 +364,18 @@ pub fn on_card(card: Option<bevy::prelude::Res<CardStep>>) -> bool {
 }
 
 /// Before the tick's steps: whether they go to the card, and if not although it is wanted, why.
+/// Steps leaving the card take its state first.
 pub fn decide_device(world: &mut World) {
     let Some(card) = world.get_resource::<CardStep>() else {
         return;
     };
     if !card.wanted {
         if card.active || card.why_not.is_some() || card.step.is_some() {
-            let mut card = world.resource_mut::<CardStep>();
-            card.forget_copy();
-            card.why_not = None;
+            with_card(world, |world, card| {
+                level_or_give_up(world, card);
+                card.forget_copy();
+                card.why_not = None;
+            });
         }
         return;
     }
@@ -336,11 +390,112 @@ pub fn decide_device(world: &mut World) {
     } else {
         unsupported(world)
     };
-    let mut card = world.resource_mut::<CardStep>();
-    card.active = why.is_none();
-    if card.why_not != why {
-        card.why_not = why;
+    let leaving = card.active && why.is_some();
+    with_card(world, |world, card| {
+        if leaving {
+            level_or_give_up(world, card);
+            card.forget_copy();
+        }
+        card.active = why.is_none();
+        if card.why_not != why {
+            card.why_not = why;
+        }
+    });
+}
+
+/// Runs `f` with the card taken out of the world (so that both can be borrowed).
+fn with_card<T>(world: &mut World, f: impl FnOnce(&mut World, &mut CardStep) -> T) -> Option<T> {
+    let mut card = world.remove_resource::<CardStep>()?;
+    let out = f(world, &mut card);
+    world.insert_resource(card);
+    Some(out)
+}
+
+/// Brings the solver and the entities level with the card's state ([`level`]); a card that
+/// fails gives the steps back to the CPU.
+fn level_or_give_up(world: &mut World, card: &mut CardStep) {
+    if let Err(e) = level(world, card) {
+        card.give_up(e);
     }
+}
+
+/// Brings the solver and the entities level with the card's state, where steps ran there since
+/// the solver last took it: the read under way, or one now. An entity whose position or
+/// velocity differs from what the solver last gave it was edited since, and keeps its edit
+/// (the tick's sync brings it into the solver). Springs the card tore are noted for removal.
+fn level(world: &mut World, card: &mut CardStep) -> Result<(), String> {
+    if !card.behind {
+        return Ok(());
+    }
+    card.behind = false;
+    let Some(step) = card.step.as_ref() else {
+        return Ok(());
+    };
+    let before = {
+        let s = &world.resource::<Solver>().state;
+        (s.x.clone(), s.v.clone())
+    };
+    // A summary under way describes the state this read brings: taken, so that no later
+    // tick reads it as news.
+    step.finish_summary().map_err(|e| e.to_string())?;
+    let mut torn = vec![];
+    let finite = take_state(world, step, &mut torn)?;
+    note_torn(world, &torn);
+    if finite {
+        world
+            .run_system_cached_with(write_back_unedited, before)
+            .map_err(|e| e.to_string())?;
+    }
+    Ok(())
+}
+
+/// The solver's positions and velocities into the particles' components, without flagging them
+/// as changed, where a component still holds what the solver had before (`before`): one that
+/// differs was edited since, and keeps its edit.
+fn write_back_unedited(
+    bevy::prelude::In((x, v)): bevy::prelude::In<(Vec<DVec2>, Vec<DVec2>)>,
+    solver: bevy::prelude::Res<Solver>,
+    mut particles: bevy::prelude::Query<
+        (
+            &super::components::SolverIndex,
+            &mut super::components::Position,
+            &mut super::components::Velocity,
+        ),
+        bevy::prelude::With<super::components::Particle>,
+    >,
+) {
+    for (index, mut pos, mut vel) in &mut particles {
+        let i = index.0 as usize;
+        let (Some(&x0), Some(&v0), Some(&x1), Some(&v1)) =
+            (x.get(i), v.get(i), solver.x.get(i), solver.v.get(i))
+        else {
+            continue;
+        };
+        if pos.0 == x0 && vel.0 == v0 {
+            pos.bypass_change_detection().0 = x1;
+            vel.bypass_change_detection().0 = v1;
+        }
+    }
+}
+
+/// The springs the card tore (their packed indices) go to the tick's tearing, which removes
+/// their entities (and the app records them for undo).
+fn note_torn(world: &mut World, torn: &[usize]) {
+    if torn.is_empty() {
+        return;
+    }
+    let entities: Vec<_> = {
+        let solver = world.resource::<Solver>();
+        torn.iter()
+            .filter_map(|&i| solver.spring_entity_in(world, i))
+            .collect()
+    };
+    // Each torn spring once: the card's list has no repeats, and the CPU does not tear
+    // while the card does.
+    world
+        .resource_mut::<super::params::Tearing>()
+        .pending
+        .extend(entities);
 }
 
 /// The tick's steps on the card (in place of the CPU's `run_steps`, under [`on_card`]).
@@ -354,7 +509,10 @@ pub fn run_steps_on_card(world: &mut World) {
         card.give_up(e);
     }
     let submitted = start.elapsed();
-    let reading = card.step.as_ref().is_some_and(GpuStep::reading);
+    let reading = card
+        .step
+        .as_ref()
+        .is_some_and(|s| s.reading() || s.summarising());
     if reading {
         // The steps' cost is known once their state comes back: the next tick's wait adds to
         // the submit's time ([`receive_from_card`]), so that the frame budget sees what the
@@ -375,10 +533,12 @@ fn tick_on_card(world: &mut World, card: &mut CardStep, steps: u64) -> Result<()
     };
     let params = world.resource::<SimParams>().clone();
     let precision = card.precision();
+    let all = settings(&params, steps);
     let settings = ExplicitSettings {
-        // Tearing stays the tick's own (the CPU's systems read the state the card sends back).
-        tear: None,
-        ..settings(&params, steps)
+        // Tearing is the tick's own (the CPU's systems read the state the card sends back),
+        // unless the state comes back on demand: then the card tears, and its summary says so.
+        tear: all.tear.filter(|_| card.on_demand),
+        ..all
     };
     let (revision, n, edits, external) = {
         let s = &world.resource::<Solver>().state;
@@ -387,6 +547,11 @@ fn tick_on_card(world: &mut World, card: &mut CardStep, steps: u64) -> Result<()
     let obstacles = world.resource::<Obstacles>().placed().len();
     let key = (revision, n, obstacles, settings, precision, external);
     let stale = card.made_for != Some(key);
+    if stale && card.behind {
+        // New settings for the same state (an edit of the world would have brought it level
+        // at the tick's start): the old copy's state first.
+        level(world, card)?;
+    }
     let step = match card.step.take() {
         Some(mut step) if !stale => {
             // The CPU changed the state since the card last had it (a drag, an undo, a user
@@ -408,58 +573,139 @@ fn tick_on_card(world: &mut World, card: &mut CardStep, steps: u64) -> Result<()
                 .map_err(|e| e.to_string())?
         }
     };
+    let reads_wanted = card.reads_wanted();
     let step = card.step.insert(step);
     step.place(world.resource::<Obstacles>().placed());
     step.run(steps as u32);
     after_run(world, steps);
-    if card.background_reads {
+    card.behind = true;
+    if card.on_demand {
+        step.begin_summary(params.gravity)
+            .map_err(|e| e.to_string())?;
+        if reads_wanted {
+            step.begin_read().map_err(|e| e.to_string())?;
+        }
+    } else if card.background_reads {
         // Taken at the start of the next tick ([`receive_from_card`]), by when the card has
         // run the steps and copied the state while the frame went on.
         step.begin_read().map_err(|e| e.to_string())?;
     } else {
-        take_state(world, step, &mut vec![])?;
+        let mut torn = vec![];
+        take_state(world, step, &mut torn)?;
+        card.behind = false;
     }
     card.edits = world.resource::<Solver>().state.edits;
     Ok(())
 }
 
-/// At the start of a tick, before the ECS's edits go into the solver: the state the last tick's
+/// At the start of a tick, before the ECS's edits go into the solver: what the last tick's
 /// steps left on the card, read in the background ([`CardStep::background_reads`]), into the
-/// solver. It waits only where the card has not finished those steps and their copy.
+/// solver; with [`CardStep::on_demand`], the card's summary, and the state where it came back
+/// too, or where the summary or the world's edits need it ([`CardStep::on_demand`]). It waits
+/// only where the card has not finished those steps and their copy.
 pub fn receive_from_card(world: &mut World) {
     receive(world);
 }
 
-/// Takes the state of a read under way, if there is one; returns whether there was.
+/// Takes the state or the summary of a read under way, if there is one, and brings the solver
+/// level where the world's edits need it; returns whether a state was taken.
 fn receive(world: &mut World) -> bool {
-    let Some(mut card) = world.remove_resource::<CardStep>() else {
-        return false;
-    };
-    let reading = card.step.as_ref().is_some_and(GpuStep::reading);
-    if let Some(step) = card.step.as_ref().filter(|_| reading) {
+    with_card(world, |world, card| {
         let start = std::time::Instant::now();
-        let taken = take_state(world, step, &mut vec![]);
+        let taken = take_reads(world, card);
         if let Some((submit, steps)) = card.submitted.take() {
             world
                 .resource_mut::<super::schedule::StepBudget>()
                 .note_steps(submit + start.elapsed(), steps);
         }
-        if let Err(e) = taken {
-            card.give_up(e);
+        match taken {
+            Ok(state) => state,
+            Err(e) => {
+                card.give_up(e);
+                false
+            }
+        }
+    })
+    .unwrap_or(false)
+}
+
+/// [`receive`]'s work; returns whether a state was taken.
+fn take_reads(world: &mut World, card: &mut CardStep) -> Result<bool, String> {
+    let Some(step) = card.step.as_ref() else {
+        return Ok(false);
+    };
+    let summary = step.finish_summary().map_err(|e| e.to_string())?;
+    let mut state = false;
+    if step.reading() {
+        let mut torn = vec![];
+        take_state(world, step, &mut torn)?;
+        note_torn(world, &torn);
+        card.behind = false;
+        state = true;
+    }
+    if let Some(s) = summary {
+        card.summary = Some(s);
+    }
+    if !card.behind {
+        return Ok(state);
+    }
+    if let Some(s) = summary {
+        world.resource_mut::<Obstacles>().contacts = crate::solver::Contacts {
+            surfaces: s.contacts[0],
+            pairs: s.contacts[1],
+            ..Default::default()
+        };
+        let total = s.energy.total();
+        // Not a change of the solver: nothing downstream redoes its work for it (the
+        // write-back of every entity least of all).
+        world
+            .resource_mut::<Solver>()
+            .bypass_change_detection()
+            .energy_on_card = Some(s.energy);
+        if let Some(mut peak) = world.get_resource_mut::<EnergyPeak>() {
+            peak.note(total);
+        }
+        if !total.is_finite() || s.torn_links > 0 {
+            // A blow-up takes the CPU's way (the state rolls back), and torn springs go.
+            level(world, card)?;
+            return Ok(true);
         }
     }
-    world.insert_resource(card);
-    reading
+    if world
+        .run_system_cached(super::sync::edits_pending)
+        .map_err(|e| e.to_string())?
+    {
+        level(world, card)?;
+        return Ok(true);
+    }
+    Ok(state)
 }
 
 /// Takes the state of a read under way into the solver and the entities now (waiting for the
-/// card): what a library user calls after stepping with [`CardStep::background_reads`] on, to
-/// see the last tick's state rather than the one before it.
+/// card), or, with [`CardStep::on_demand`], reads it now: what a library user calls after
+/// stepping with background reads, to see the last tick's state rather than an older one.
 pub fn catch_up(world: &mut World) -> Result<(), String> {
-    if !receive(world) {
-        return Ok(());
+    let before = {
+        let s = &world.resource::<Solver>().state;
+        (s.x.clone(), s.v.clone())
+    };
+    if receive(world) && !world.resource::<Solver>().non_finite {
+        // Edits of the world since the last tick keep theirs, as with `level`.
+        world
+            .run_system_cached_with(write_back_unedited, before)
+            .map_err(|e| e.to_string())?;
     }
-    world
-        .run_system_cached(super::sync::sync_from_solver)
-        .map_err(|e| e.to_string())
+    with_card(world, level).unwrap_or(Ok(()))
+}
+
+/// Before a frame's input is handled: while reads are wanted ([`CardStep::keep_reading`]: the
+/// app asks on every input), the solver and the entities level with the card, so that picking
+/// and edits see the state of the last tick.
+pub fn catch_up_while_reading(world: &mut World) {
+    let wanted = world
+        .get_resource::<CardStep>()
+        .is_some_and(|c| c.on_demand && c.active && c.behind && c.reads_wanted());
+    if wanted && let Err(e) = catch_up(world) {
+        with_card(world, |_, card| card.give_up(e));
+    }
 }

@@ -277,7 +277,9 @@ impl Plugin for SimPlugin {
                     .run_if(inputs::inputs_valid)
                     .run_if(resource_changed::<super::obstacles::Obstacles>),
                 (
-                    tear::find_torn_springs.run_if(tear::tearing_enabled),
+                    tear::find_torn_springs
+                        .run_if(tear::tearing_enabled)
+                        .run_if(not(card_tears)),
                     tear::remove_torn_springs.run_if(tear::tears_pending),
                 )
                     .chain()
@@ -301,6 +303,11 @@ impl Plugin for SimPlugin {
                     .in_set(PhysicsSystems::Prepare)
                     .after(check_tick)
                     .before(sync_tick),
+                tear::remove_springs_torn_on_card
+                    .in_set(PhysicsSystems::Prepare)
+                    .after(super::gpu::receive_from_card)
+                    .before(sync_tick)
+                    .run_if(tear::tears_pending),
                 super::gpu::decide_device
                     .in_set(PhysicsSystems::Prepare)
                     .after(sync_tick)
@@ -647,6 +654,15 @@ fn collide(
 fn on_card(#[cfg(feature = "gpu")] card: Option<Res<super::gpu::CardStep>>) -> bool {
     #[cfg(feature = "gpu")]
     return super::gpu::on_card(card);
+    #[cfg(not(feature = "gpu"))]
+    false
+}
+
+/// Whether the card tears this tick's springs (its state read on demand), so that the CPU
+/// does not look at a state that lags it.
+fn card_tears(#[cfg(feature = "gpu")] card: Option<Res<super::gpu::CardStep>>) -> bool {
+    #[cfg(feature = "gpu")]
+    return card.is_some_and(|c| c.active() && c.on_demand);
     #[cfg(not(feature = "gpu"))]
     false
 }

@@ -39,6 +39,10 @@ pub struct Solver {
     /// rather than an [`Entity`]'s eight (the generation): at millions of springs every byte
     /// per spring shows in memory. [`Solver::spring_entity`] resolves and checks it.
     pub(crate) spring_entity_indices: Vec<u32>,
+    /// The card's sum of its state's energy, while the steps run there and the packed state
+    /// lags the card's (the card's state read on demand: [`crate::sim::gpu`]); `None` when the
+    /// packed state is the latest.
+    pub(crate) energy_on_card: Option<crate::solver::Energy>,
 }
 
 impl Deref for Solver {
@@ -55,6 +59,13 @@ impl DerefMut for Solver {
 }
 
 impl Solver {
+    /// The state's energy now: the card's own sum while the steps run there and the packed
+    /// state lags the card's (its state read on demand), else the packed state's.
+    pub fn energy_now(&self, gravity: bevy::math::DVec2) -> crate::solver::Energy {
+        self.energy_on_card
+            .unwrap_or_else(|| self.state.energy(gravity))
+    }
+
     /// Particle entity of each dense index, in creation order.
     pub fn entities(&self) -> &[Entity] {
         &self.entities

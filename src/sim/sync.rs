@@ -109,6 +109,19 @@ pub struct Edits<'w, 's> {
     springs: Query<'w, 's, (Entity, Ref<'static, Spring>), SpringEdited>,
 }
 
+/// Whether the world holds edits that [`sync_into_solver`] would bring into the solver (read
+/// without taking them: its own readers still see them). The card's step asks before it, while
+/// the solver lags the card's state (`sim::gpu`): an edit must land on the latest state.
+/// Between its runs a change counts once it happened after the last; a change it saw before
+/// and the sync since took only costs one more read of the card.
+#[cfg(feature = "gpu")]
+pub fn edits_pending(mut structure: StructureChanges, edits: Edits) -> bool {
+    structure.any()
+        || !edits.particles.is_empty()
+        || !edits.released.is_empty()
+        || !edits.springs.is_empty()
+}
+
 /// Brings ECS edits into the solver. Runs at the start of every fixed tick.
 pub fn sync_into_solver(
     mut solver: ResMut<Solver>,
@@ -383,6 +396,7 @@ fn rebuild(solver: &mut Solver, particles: &mut Particles, springs: &Springs) {
         state,
         entities,
         spring_entity_indices,
+        energy_on_card: None,
     };
 }
 

@@ -45,7 +45,19 @@ pub fn find_torn_springs(
 }
 
 /// Despawns the springs [`find_torn_springs`] found, and counts them.
-pub fn remove_torn_springs(mut commands: Commands, mut tearing: ResMut<Tearing>) {
+pub fn remove_torn_springs(commands: Commands, tearing: ResMut<Tearing>) {
+    remove_pending(commands, tearing);
+}
+
+/// Despawns the springs the card tore in the last tick (`sim::gpu`, its state read on demand),
+/// at the start of this one, before the solver syncs: as the CPU's removal at the end of the
+/// last, so that the repack leaves them out. (A system of its own, so that the app's undo can
+/// record the state before either removal.)
+pub fn remove_springs_torn_on_card(commands: Commands, tearing: ResMut<Tearing>) {
+    remove_pending(commands, tearing);
+}
+
+fn remove_pending(mut commands: Commands, mut tearing: ResMut<Tearing>) {
     let pending = std::mem::take(&mut tearing.pending);
     tearing.torn += pending.len() as u64;
     for e in pending {

@@ -69,7 +69,7 @@ pub(crate) fn track_energy_peak(
     mut peak: ResMut<EnergyPeak>,
 ) {
     let clock = std::time::Instant::now();
-    let e = solver.energy(params.gravity).total();
+    let e = solver.energy_now(params.gravity).total();
     peak.note(e);
     peak.seconds += clock.elapsed().as_secs_f64();
 }
@@ -157,7 +157,7 @@ pub fn watch_energy(
     mut status: ResMut<SimStatus>,
 ) {
     let shape = (solver.particle_count(), solver.spring_count());
-    let energy = solver.energy(params.gravity).total();
+    let energy = solver.energy_now(params.gravity).total();
     let interacting = solver.kinematic > 0 || solver.external_active;
     let edited = params.is_changed()
         || interacting

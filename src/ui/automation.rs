@@ -114,6 +114,10 @@ pub fn drive(
             "adapter": app.card.adapter(),
             "gpu_wanted": app.card.wanted,
             "gpu_why_not": app.card.why_not,
+            // Whether the solver's state (and `positions`) lag the card's: with the state read
+            // on demand, while nothing in the window wants it.
+            "state_lags_card": app.card.behind(),
+            "energy": solver.energy_now(params.gravity).total(),
             // Whether the meshes are drawn from the card's buffers, and frames drawn so.
             "drawn_on_card": app.picture.active(),
             "frames_drawn_on_card": app.picture.frames_drawn(),

@@ -115,6 +115,33 @@ pub fn track_presses(
     }
 }
 
+/// How long after the last input the card's state keeps coming back each tick.
+const READ_AFTER_INPUT: std::time::Duration = std::time::Duration::from_secs(1);
+
+/// Input in the window (the pointer, a button, the wheel, a key, a dropped file) asks for the
+/// card's state each tick for the next second, while the steps run there with their state read
+/// on demand: picking, dragging and editing then see the state of the last tick, as on the
+/// CPU. A window nobody touches reads only the card's summary.
+pub fn read_the_card_on_input(
+    mut events: MessageReader<WindowEvent>,
+    mut card: ResMut<crate::sim::gpu::CardStep>,
+) {
+    let input = events.read().any(|e| {
+        matches!(
+            e,
+            WindowEvent::CursorMoved(_)
+                | WindowEvent::MouseButtonInput(_)
+                | WindowEvent::MouseWheel(_)
+                | WindowEvent::KeyboardInput(_)
+                | WindowEvent::FileDragAndDrop(_)
+                | WindowEvent::TouchInput(_)
+        )
+    });
+    if input {
+        card.keep_reading(READ_AFTER_INPUT);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

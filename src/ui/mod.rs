@@ -68,6 +68,15 @@ impl Plugin for AppPlugin {
                 }
                 world.resource_mut::<crate::sim::gpu::CardStep>().wanted = gpu;
             })
+            // Before the frame's input is handled: the card's state where input wants it.
+            .add_systems(
+                PreUpdate,
+                (
+                    events::read_the_card_on_input,
+                    crate::sim::gpu::catch_up_while_reading,
+                )
+                    .chain(),
+            )
             .add_systems(
                 PreUpdate,
                 pace::drop_unchanged_modifiers
@@ -84,6 +93,14 @@ impl Plugin for AppPlugin {
                 (|w: &mut World| history::record_burst(w, "tear", None))
                     .after(tear::find_torn_springs)
                     .before(tear::remove_torn_springs)
+                    .run_if(tear::tears_pending),
+            )
+            // The same before the springs the card tore go (`sim::gpu`'s reads on demand).
+            .add_systems(
+                FixedUpdate,
+                (|w: &mut World| history::record_burst(w, "tear", None))
+                    .after(crate::sim::gpu::receive_from_card)
+                    .before(tear::remove_springs_torn_on_card)
                     .run_if(tear::tears_pending),
             )
             .add_systems(
@@ -169,6 +186,8 @@ fn hand_over_the_card(
         queue.clone(),
         wgpu::AdapterInfo::clone(&info.0),
     ));
-    // A frame never waits for the card's state: it comes back while the frame goes on.
+    // A frame never waits for the card's state: it comes back while the frame goes on, and
+    // only while input wants it; other ticks bring back the card's summary.
     card.background_reads = true;
+    card.on_demand = true;
 }

@@ -39,8 +39,10 @@ pub fn sample(
     stability: Res<Stability>,
     mut timeline: ResMut<Timeline>,
 ) {
-    if solver.is_changed() || params.is_changed() {
-        timeline.energy = solver.energy(params.gravity);
+    // While the card steps and its state is read on demand, the card's sum comes each tick
+    // without the solver changing.
+    if solver.is_changed() || params.is_changed() || solver.energy_on_card.is_some() {
+        timeline.energy = solver.energy_now(params.gravity);
     }
     // An empty solver is one not packed yet (a scene load, an undo): its energy is not the
     // scene's.

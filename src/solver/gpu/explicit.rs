@@ -8,10 +8,11 @@
 //! spring's length is computed twice, once per end, which costs less on a card than a scatter.
 
 use super::context::{Gpu, GpuError, Precision, ready};
+use super::summary::{Sources, Summary, SummaryPass};
 use crate::solver::contact::ContactSettings;
 use crate::solver::contact::obstacle::{MIN_THICKNESS, Placed, SLOP, Shape};
 use crate::solver::contact::pairs::Pairs;
-use crate::solver::state::State;
+use crate::solver::state::{Energy, State};
 use glam::DVec2;
 use wgpu::util::DeviceExt;
 
@@ -107,10 +108,17 @@ pub struct GpuStep {
     /// The last step's contacts with surfaces and between particles, as the last read brought
     /// them.
     contacts: [std::sync::atomic::AtomicUsize; 2],
-    /// The read-back's staging buffer, kept between reads.
-    staging: std::sync::Mutex<Option<wgpu::Buffer>>,
+    /// The read-back's staging buffers, kept between reads: the state's, and the summary's.
+    staging: [std::sync::Mutex<Option<wgpu::Buffer>>; 2],
     /// A read of the state started and not yet taken ([`Self::begin_read`]).
     pending: std::sync::Mutex<Option<Read>>,
+    /// The summary's reductions, made at the first summary asked for, and the buffers they
+    /// read besides the state's (the links and their records).
+    summary: std::sync::OnceLock<SummaryPass>,
+    summary_sources: (wgpu::Buffer, wgpu::Buffer),
+    /// A summary started and not yet taken ([`Self::begin_summary`]), with the host's share
+    /// of the energy (the fixed particles') as they stood when it was asked for.
+    summary_pending: std::sync::Mutex<Option<(Read, Energy)>>,
     /// The contact pass, when the scene has obstacles, or a ground with contact set.
     contact: Option<ContactPass>,
     /// Tearing's pass, when tearing is on.
@@ -124,6 +132,8 @@ pub struct GpuStep {
     /// The particles the step does not move (inverse mass 0: pinned, or held by a drag), with
     /// the position and velocity the card has for each.
     fixed: Vec<(usize, DVec2, DVec2)>,
+    /// The masses of the particles in `fixed`, in its order.
+    fixed_mass: Vec<f64>,
     /// Inverse masses, and each spring's ends and rest length for the drawing (`draw.rs`).
     inv_mass: wgpu::Buffer,
     drawn_springs: wgpu::Buffer,
@@ -134,6 +144,8 @@ pub struct GpuStep {
 #[derive(Debug)]
 struct Read {
     staging: wgpu::Buffer,
+    /// Which of [`GpuStep`]'s staging buffers it is (0: the state's, 1: the summary's).
+    slot: usize,
     total: u64,
     mapped: std::sync::mpsc::Receiver<Result<(), wgpu::BufferAsyncError>>,
 }
@@ -385,12 +397,16 @@ impl GpuStep {
             contacts: Default::default(),
             staging: Default::default(),
             pending: Default::default(),
+            summary: Default::default(),
+            summary_sources: (links.clone(), spring.clone()),
+            summary_pending: Default::default(),
             contact,
             tear,
             xpbd,
             since_tear: 0,
             link_spring,
             fixed: fixed(state),
+            fixed_mass: fixed_mass(state),
             inv_mass: w,
             drawn_springs,
         };
@@ -576,6 +592,7 @@ impl GpuStep {
             q.write_buffer(&self.external, 0, &vectors(&state.external, self.precision));
         }
         self.fixed = fixed(state);
+        self.fixed_mass = fixed_mass(state);
     }
 
     /// Uploads the position and velocity of each particle the step does not move (pinned, or
@@ -719,7 +736,7 @@ impl GpuStep {
         if let Some(c) = &self.contact {
             ranges.push((&c.counter, 0, 16));
         }
-        *pending = Some(self.start_read(&ranges)?);
+        *pending = Some(self.start_read(0, &ranges)?);
         Ok(())
     }
 
@@ -765,6 +782,97 @@ impl GpuStep {
         Ok(())
     }
 
+    /// Starts the summary of the state as the steps submitted so far leave it (its energy
+    /// under `gravity`, the links torn, the last step's contacts), without waiting:
+    /// [`Self::finish_summary`] takes it. A summary already under way is kept.
+    pub fn begin_summary(&self, gravity: DVec2) -> Result<(), GpuError> {
+        let mut pending = self
+            .summary_pending
+            .lock()
+            .map_err(|e| GpuError::ReadBack(e.to_string()))?;
+        if pending.is_some() {
+            return Ok(());
+        }
+        let pass = self.summary.get_or_init(|| {
+            SummaryPass::new(
+                &self.gpu,
+                self.precision,
+                self.n,
+                self.dashpots,
+                Sources {
+                    x: [&self.x[0], &self.x[1]],
+                    v: [&self.v[0], &self.v[1]],
+                    w: &self.inv_mass,
+                    links: &self.summary_sources.0,
+                    spring: &self.summary_sources.1,
+                    torn: self.tear.as_ref().map(|t| &t.torn),
+                },
+            )
+        });
+        pass.record(&self.gpu, self.precision, (self.n, self.current), gravity);
+        let (at, length) = pass.total_at(self.precision);
+        let mut ranges = vec![(&pass.sums, at, length)];
+        if let Some(c) = &self.contact {
+            ranges.push((&c.counter, 0, 16));
+        }
+        // The fixed particles move on the host: their share, as the card has them now.
+        let mut host = Energy::default();
+        for ((_, x, v), m) in self.fixed.iter().zip(&self.fixed_mass) {
+            host.kinetic += 0.5 * m * v.length_squared();
+            host.potential_gravity -= m * gravity.dot(*x);
+        }
+        *pending = Some((self.start_read(1, &ranges)?, host));
+        Ok(())
+    }
+
+    /// Whether a summary was started and not yet taken.
+    pub fn summarising(&self) -> bool {
+        self.summary_pending.lock().is_ok_and(|p| p.is_some())
+    }
+
+    /// Takes the summary [`Self::begin_summary`] started, waiting for the card only if it has
+    /// not finished it; `None` without one under way.
+    pub fn finish_summary(&self) -> Result<Option<Summary>, GpuError> {
+        let taken = self
+            .summary_pending
+            .lock()
+            .map_err(|e| GpuError::ReadBack(e.to_string()))?
+            .take();
+        let Some((read, host)) = taken else {
+            return Ok(None);
+        };
+        let bytes = self.end_read(read)?;
+        let width = 4 * self.precision.bytes();
+        let sums = from_bytes(&bytes[..width], self.precision);
+        let words: Vec<usize> = bytes[width..]
+            .chunks_exact(4)
+            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]) as usize)
+            .collect();
+        let contacts = match words[..] {
+            [_, surfaces, pairs, _] => [surfaces, pairs],
+            _ => [0, 0],
+        };
+        let relaxed = std::sync::atomic::Ordering::Relaxed;
+        self.contacts[0].store(contacts[0], relaxed);
+        self.contacts[1].store(contacts[1], relaxed);
+        Ok(Some(Summary {
+            energy: Energy {
+                kinetic: sums[0] + host.kinetic,
+                potential_gravity: sums[1] + host.potential_gravity,
+                potential_springs: sums[2],
+                potential_gas: 0.0,
+            },
+            torn_links: sums[3].max(0.0).round() as u64,
+            contacts,
+        }))
+    }
+
+    /// The summary of the state now, waiting for the card.
+    pub fn summary(&self, gravity: DVec2) -> Result<Summary, GpuError> {
+        self.begin_summary(gravity)?;
+        Ok(self.finish_summary()?.unwrap_or_default())
+    }
+
     fn lock_pending(&self) -> Result<std::sync::MutexGuard<'_, Option<Read>>, GpuError> {
         self.pending
             .lock()
@@ -774,17 +882,21 @@ impl GpuStep {
     /// The bytes of the buffers' ranges `(buffer, offset, length)`, one after the other,
     /// waiting for the card.
     fn read(&self, ranges: &[(&wgpu::Buffer, u64, u64)]) -> Result<Vec<u8>, GpuError> {
-        let read = self.start_read(ranges)?;
+        let read = self.start_read(0, ranges)?;
         self.end_read(read)
     }
 
-    /// Copies the ranges into the staging buffer and asks for it mapped, without waiting.
-    fn start_read(&self, ranges: &[(&wgpu::Buffer, u64, u64)]) -> Result<Read, GpuError> {
+    /// Copies the ranges into the staging buffer of `slot` (0: the state's, 1: the
+    /// summary's) and asks for it mapped, without waiting.
+    fn start_read(
+        &self,
+        slot: usize,
+        ranges: &[(&wgpu::Buffer, u64, u64)],
+    ) -> Result<Read, GpuError> {
         let total: u64 = ranges.iter().map(|r| r.2).sum();
-        // One staging buffer, kept for the next read (the app reads every tick): a new one
-        // only when a read is larger than the last.
-        let mut kept = self
-            .staging
+        // One staging buffer a slot, kept for the next read (the app reads every tick): a new
+        // one only when a read is larger than the last.
+        let mut kept = self.staging[slot]
             .lock()
             .map_err(|e| GpuError::ReadBack(e.to_string()))?;
         let size = total.max(8).next_multiple_of(8);
@@ -817,6 +929,7 @@ impl GpuStep {
         });
         Ok(Read {
             staging,
+            slot,
             total,
             mapped: rx,
         })
@@ -827,6 +940,7 @@ impl GpuStep {
     fn end_read(&self, read: Read) -> Result<Vec<u8>, GpuError> {
         let Read {
             staging,
+            slot,
             total,
             mapped,
         } = read;
@@ -842,7 +956,7 @@ impl GpuStep {
         done.map_err(|e| GpuError::ReadBack(e.to_string()))?;
         let bytes = staging.slice(..).get_mapped_range()[..total as usize].to_vec();
         staging.unmap();
-        if let Ok(mut kept) = self.staging.lock() {
+        if let Ok(mut kept) = self.staging[slot].lock() {
             *kept = Some(staging);
         }
         Ok(bytes)
@@ -1170,6 +1284,14 @@ fn fixed(state: &State) -> Vec<(usize, DVec2, DVec2)> {
     (state.inv_mass.iter().enumerate())
         .filter(|(_, w)| **w == 0.0)
         .map(|(i, _)| (i, state.x[i], state.v[i]))
+        .collect()
+}
+
+/// The masses of [`fixed`]'s particles, in its order.
+fn fixed_mass(state: &State) -> Vec<f64> {
+    (state.inv_mass.iter().zip(&state.mass))
+        .filter(|(w, _)| **w == 0.0)
+        .map(|(_, &m)| m)
         .collect()
 }
 

@@ -9,7 +9,9 @@
 //! CPU's colours and order with the same contact inside its substeps (`xpbd.wgsl`), all in
 //! [`GpuStep`]; in f32, and in f64 where the adapter has `SHADER_F64`. The state stays on the
 //! card between steps and comes back only when asked ([`GpuStep::read_into`], or started with
-//! [`GpuStep::begin_read`] and taken later, so that the caller need not wait). What does not
+//! [`GpuStep::begin_read`] and taken later, so that the caller need not wait); what a caller
+//! needs of it every tick (its energy by kind, springs torn) comes back reduced on the card as a
+//! [`Summary`] (`summary.wgsl`, [`GpuStep::begin_summary`]). What does not
 //! run here (the other methods, XPBD to a tolerance, contact by outlines, pressure bodies,
 //! muscles, plasticity) stays on the CPU, and the callers say so ([`GpuStep::unsupported`],
 //! [`crate::sim::gpu`]).
@@ -21,6 +23,7 @@ mod context;
 mod draw;
 mod explicit;
 mod pairs;
+mod summary;
 mod xpbd;
 
 pub use context::{Gpu, GpuError, Precision};
@@ -29,3 +32,4 @@ pub use draw::{
     VERTEX_BYTES,
 };
 pub use explicit::{ExplicitMethod, ExplicitSettings, GpuStep, TearSettings};
+pub use summary::Summary;
