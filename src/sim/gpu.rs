@@ -431,10 +431,7 @@ fn level(world: &mut World, card: &mut CardStep) -> Result<(), String> {
     let Some(step) = card.step.as_ref() else {
         return Ok(());
     };
-    let before = {
-        let s = &world.resource::<Solver>().state;
-        (s.x.clone(), s.v.clone())
-    };
+    let before = motion(world);
     // A summary under way describes the state this read brings: taken, so that no later
     // tick reads it as news.
     step.finish_summary().map_err(|e| e.to_string())?;
@@ -447,6 +444,13 @@ fn level(world: &mut World, card: &mut CardStep) -> Result<(), String> {
             .map_err(|e| e.to_string())?;
     }
     Ok(())
+}
+
+/// The solver's positions and velocities as they stand: what [`write_back_unedited`] compares
+/// the particles' components with, after a read changed the solver.
+fn motion(world: &World) -> (Vec<DVec2>, Vec<DVec2>) {
+    let s = &world.resource::<Solver>().state;
+    (s.x.clone(), s.v.clone())
 }
 
 /// The solver's positions and velocities into the particles' components, without flagging them
@@ -590,8 +594,8 @@ fn tick_on_card(world: &mut World, card: &mut CardStep, steps: u64) -> Result<()
         // run the steps and copied the state while the frame went on.
         step.begin_read().map_err(|e| e.to_string())?;
     } else {
-        let mut torn = vec![];
-        take_state(world, step, &mut torn)?;
+        // The card does not tear here (only with reads on demand): nothing torn to note.
+        take_state(world, step, &mut vec![])?;
         card.behind = false;
     }
     card.edits = world.resource::<Solver>().state.edits;
@@ -685,10 +689,7 @@ fn take_reads(world: &mut World, card: &mut CardStep) -> Result<bool, String> {
 /// card), or, with [`CardStep::on_demand`], reads it now: what a library user calls after
 /// stepping with background reads, to see the last tick's state rather than an older one.
 pub fn catch_up(world: &mut World) -> Result<(), String> {
-    let before = {
-        let s = &world.resource::<Solver>().state;
-        (s.x.clone(), s.v.clone())
-    };
+    let before = motion(world);
     if receive(world) && !world.resource::<Solver>().non_finite {
         // Edits of the world since the last tick keep theirs, as with `level`.
         world

@@ -130,10 +130,9 @@ pub struct GpuStep {
     /// Each link's spring, in the state's spring order.
     link_spring: Vec<u32>,
     /// The particles the step does not move (inverse mass 0: pinned, or held by a drag), with
-    /// the position and velocity the card has for each.
-    fixed: Vec<(usize, DVec2, DVec2)>,
-    /// The masses of the particles in `fixed`, in its order.
-    fixed_mass: Vec<f64>,
+    /// the position and velocity the card has for each, and its mass (for the summary's
+    /// energy).
+    fixed: Vec<(usize, DVec2, DVec2, f64)>,
     /// Inverse masses, and each spring's ends and rest length for the drawing (`draw.rs`).
     inv_mass: wgpu::Buffer,
     drawn_springs: wgpu::Buffer,
@@ -406,7 +405,6 @@ impl GpuStep {
             since_tear: 0,
             link_spring,
             fixed: fixed(state),
-            fixed_mass: fixed_mass(state),
             inv_mass: w,
             drawn_springs,
         };
@@ -592,7 +590,6 @@ impl GpuStep {
             q.write_buffer(&self.external, 0, &vectors(&state.external, self.precision));
         }
         self.fixed = fixed(state);
-        self.fixed_mass = fixed_mass(state);
     }
 
     /// Uploads the position and velocity of each particle the step does not move (pinned, or
@@ -600,7 +597,7 @@ impl GpuStep {
     /// every frame without touching the rest of the state.
     pub fn write_fixed(&mut self, state: &State) {
         let width = 2 * self.precision.bytes() as u64;
-        for (i, x, v) in &mut self.fixed {
+        for (i, x, v, _) in &mut self.fixed {
             let (now_x, now_v) = match (state.x.get(*i), state.v.get(*i)) {
                 (Some(x), Some(v)) => (*x, *v),
                 _ => continue,
@@ -757,15 +754,7 @@ impl GpuStep {
         let view = self.end_read(read)?;
         let bytes = (self.n as u64) * 2 * self.precision.bytes() as u64;
         let (state_bytes, counter) = view.split_at((2 * bytes) as usize);
-        let words: Vec<usize> = counter
-            .chunks_exact(4)
-            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]) as usize)
-            .collect();
-        if let [_, surfaces, pairs, _] = words[..] {
-            let relaxed = std::sync::atomic::Ordering::Relaxed;
-            self.contacts[0].store(surfaces, relaxed);
-            self.contacts[1].store(pairs, relaxed);
-        }
+        self.note_contacts(counter);
         let values = from_bytes(state_bytes, self.precision);
         let n = self.n as usize;
         // A pinned particle does not move on the card: it keeps its f64 position, which
@@ -817,7 +806,7 @@ impl GpuStep {
         }
         // The fixed particles move on the host: their share, as the card has them now.
         let mut host = Energy::default();
-        for ((_, x, v), m) in self.fixed.iter().zip(&self.fixed_mass) {
+        for (_, x, v, m) in &self.fixed {
             host.kinetic += 0.5 * m * v.length_squared();
             host.potential_gravity -= m * gravity.dot(*x);
         }
@@ -844,17 +833,7 @@ impl GpuStep {
         let bytes = self.end_read(read)?;
         let width = 4 * self.precision.bytes();
         let sums = from_bytes(&bytes[..width], self.precision);
-        let words: Vec<usize> = bytes[width..]
-            .chunks_exact(4)
-            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]) as usize)
-            .collect();
-        let contacts = match words[..] {
-            [_, surfaces, pairs, _] => [surfaces, pairs],
-            _ => [0, 0],
-        };
-        let relaxed = std::sync::atomic::Ordering::Relaxed;
-        self.contacts[0].store(contacts[0], relaxed);
-        self.contacts[1].store(contacts[1], relaxed);
+        let contacts = self.note_contacts(&bytes[width..]).unwrap_or([0, 0]);
         Ok(Some(Summary {
             energy: Energy {
                 kinetic: sums[0] + host.kinetic,
@@ -871,6 +850,22 @@ impl GpuStep {
     pub fn summary(&self, gravity: DVec2) -> Result<Summary, GpuError> {
         self.begin_summary(gravity)?;
         Ok(self.finish_summary()?.unwrap_or_default())
+    }
+
+    /// The contact pass's counter as a read brought it back (four u32 words; none without a
+    /// contact pass), noted as the last step's contacts: with surfaces, and between particles.
+    fn note_contacts(&self, counter: &[u8]) -> Option<[usize; 2]> {
+        let words: Vec<usize> = counter
+            .chunks_exact(4)
+            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]) as usize)
+            .collect();
+        let [_, surfaces, pairs, _] = words[..] else {
+            return None;
+        };
+        let relaxed = std::sync::atomic::Ordering::Relaxed;
+        self.contacts[0].store(surfaces, relaxed);
+        self.contacts[1].store(pairs, relaxed);
+        Some([surfaces, pairs])
     }
 
     fn lock_pending(&self) -> Result<std::sync::MutexGuard<'_, Option<Read>>, GpuError> {
@@ -1278,20 +1273,12 @@ impl ContactPass {
     }
 }
 
-/// The particles of `state` the step does not move (inverse mass 0), with their positions and
-/// velocities.
-fn fixed(state: &State) -> Vec<(usize, DVec2, DVec2)> {
+/// The particles of `state` the step does not move (inverse mass 0), with their positions,
+/// velocities and masses.
+fn fixed(state: &State) -> Vec<(usize, DVec2, DVec2, f64)> {
     (state.inv_mass.iter().enumerate())
         .filter(|(_, w)| **w == 0.0)
-        .map(|(i, _)| (i, state.x[i], state.v[i]))
-        .collect()
-}
-
-/// The masses of [`fixed`]'s particles, in its order.
-fn fixed_mass(state: &State) -> Vec<f64> {
-    (state.inv_mass.iter().zip(&state.mass))
-        .filter(|(w, _)| **w == 0.0)
-        .map(|(_, &m)| m)
+        .map(|(i, _)| (i, state.x[i], state.v[i], state.mass[i]))
         .collect()
 }
 
