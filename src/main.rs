@@ -46,7 +46,7 @@ struct AppArgs {
 
 #[derive(Subcommand, Debug)]
 enum Command {
-    /// Run a scene headless (no window, no GPU) and report.
+    /// Run a scene headless (no window) and report.
     #[command(allow_negative_numbers = true)]
     Run(RunArgs),
     /// Measured reports: work-precision, stability limits, performance.
@@ -420,13 +420,17 @@ fn run(args: RunArgs) -> ExitCode {
             number(r.energy_start, 6),
             number(r.energy_end, 6)
         );
+        let plural =
+            |n: u64, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
         if r.springs_torn > 0 {
-            println!("{} springs tore", r.springs_torn);
+            let torn = plural(r.springs_torn, "spring", "springs");
+            println!("{torn} tore");
         }
         if r.contacts > 0 {
             println!(
-                "{} contacts in the last step ({} between particles)",
-                r.contacts, r.pair_contacts
+                "{} in the last step ({} between particles)",
+                plural(r.contacts as u64, "contact", "contacts"),
+                r.pair_contacts
             );
         }
         if let Some(t) = &r.pass_seconds {

@@ -60,6 +60,26 @@ fn every_shipped_scene_loads_and_runs() {
     }
 }
 
+/// Every scene of `assets/scenes/` (its benchmarks and hard cases aside) is built in, so that
+/// `--scene NAME` opens it from any directory, as the guide's list of shipped scenes promises:
+/// `crates` once was listed there and could only be opened by its path.
+#[test]
+fn every_shipped_scene_is_built_in() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    for entry in std::fs::read_dir(&dir).unwrap().flatten() {
+        let path = entry.path();
+        if path.extension().is_some_and(|x| x == "ron") {
+            let name = path.file_stem().unwrap().to_string_lossy().into_owned();
+            let built_in = presets::BUILTIN.iter().find(|(n, _)| *n == name);
+            let text = std::fs::read_to_string(&path).unwrap();
+            assert!(
+                built_in.is_some_and(|(_, t)| *t == text),
+                "{name} is shipped but not built in"
+            );
+        }
+    }
+}
+
 /// The app opens on the unit square: a built-in scene stays in it while it plays out (the
 /// soft box, thrown at 1 m/s, once slid on over the frictionless ground to x = 1.3-1.6 and left
 /// the user an empty canvas). 6 s simulated: the thrown box has then slid 99 % of its way.
@@ -195,6 +215,56 @@ fn spring_index_out_of_range() {
         msg.contains("bad.ron") && msg.contains("springs[0]: b = 7 is out of range"),
         "{msg}"
     );
+    assert!(
+        msg.contains("the scene has 2 particles: indices 0 to 1"),
+        "{msg}"
+    );
+    let one = invalid(|s| {
+        s.replace(
+            "(pos: (0.5, 0.8), vel: (0.0, 0.0), mass: 1.0, pinned: false),",
+            "",
+        )
+    });
+    assert!(one.contains("the scene has 1 particle: index 0"), "{one}");
+}
+
+/// A scene's five parameters left out are the app's: a file of one generator runs as the app
+/// runs it, where it once stopped at "Unexpected missing field named `gravity`".
+#[test]
+fn the_parameters_left_out_are_the_apps() {
+    let loaded = parse("(generate: [Chain(from: (0.1, 0.9), to: (0.9, 0.9), segments: 8)])")
+        .unwrap_or_else(|e| panic!("{e}"));
+    let app = hooke::sim::SimParams::default();
+    let s = &loaded.scene;
+    assert_eq!(s.gravity, (app.gravity.x, app.gravity.y));
+    assert_eq!(
+        (s.damping, s.ground, s.integrator, s.dt),
+        (app.damping, app.ground, app.integrator, app.dt)
+    );
+    // `ground: None` still takes the ground away.
+    let open = parse("(ground: None)").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(open.scene.ground, None);
+}
+
+/// A field the format needs is named with its place, as a misspelled one is.
+#[test]
+fn a_missing_field_is_named_with_its_place() {
+    for (from, to, names) in [
+        (", rest: 0.1)", ")", ["missing field `rest`", "in a spring"]),
+        (
+            "(pos: (0.5, 0.9), ",
+            "(",
+            ["missing field `pos`", "in a particle"],
+        ),
+    ] {
+        let msg = parse(&scene_text(|s| s.replacen(from, to, 1)))
+            .expect_err(from)
+            .to_string();
+        for name in names {
+            assert!(msg.contains(name), "{msg} should name {name}");
+        }
+        assert!(msg.contains("docs/scene-format.md"), "{msg}");
+    }
 }
 
 #[test]

@@ -24,6 +24,8 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("balloon", include_str!("../../assets/scenes/balloon.ron")),
     ("walker", include_str!("../../assets/scenes/walker.ron")),
     ("wire", include_str!("../../assets/scenes/wire.ron")),
+    // Rigid bodies: a build without the `avian` feature refuses it, and says why.
+    ("crates", include_str!("../../assets/scenes/crates.ron")),
 ];
 
 /// The scene the app opens with: the assignment's empty canvas.

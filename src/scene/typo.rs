@@ -7,7 +7,8 @@
 //! list of the names it expected; this module picks the near ones out of that list.
 
 /// The message for a RON error: ron's own words, except for an unknown field or variant, which
-/// is named with its place in the scene, the near names, and every name allowed there.
+/// is named with its place in the scene, the near names, and every name allowed there, and a
+/// missing field, named with its place.
 pub(crate) fn message(code: &ron::Error) -> String {
     match code {
         ron::Error::NoSuchStructField {
@@ -20,6 +21,10 @@ pub(crate) fn message(code: &ron::Error) -> String {
             found,
             outer,
         } => unknown("variant", found, expected, outer.as_deref()),
+        ron::Error::MissingStructField { field, outer } => {
+            let place = outer.as_deref().map(place).unwrap_or_default();
+            format!("missing field `{field}`{place} (every field: docs/scene-format.md)")
+        }
         other => other.to_string(),
     }
 }

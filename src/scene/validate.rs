@@ -184,9 +184,8 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
         for (end, idx) in [("a", s.a), ("b", s.b)] {
             if idx >= n_particles {
                 p.push(format!(
-                    "{at}: {end} = {idx} is out of range (the scene has {n_particles} particles, \
-                     indices 0..{})",
-                    n_particles.saturating_sub(1)
+                    "{at}: {end} = {idx} is out of range ({})",
+                    indices(n_particles)
                 ));
             }
         }
@@ -245,7 +244,8 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
         }
         if let Some(&bad) = body.particles.iter().find(|&&j| j >= n_particles) {
             p.push(format!(
-                "{at}: particle {bad} is out of range (the scene has {n_particles} particles)"
+                "{at}: particle {bad} is out of range ({})",
+                indices(n_particles)
             ));
         }
         let mut seen = body.particles.clone();
@@ -318,6 +318,15 @@ fn pairs_start_apart(scene: &Scene, radius: f64) -> Option<String> {
          such pair: at most {:.4} here",
         0.5 * d
     ))
+}
+
+/// The valid indices, for an index out of range: "the scene has 3 particles: indices 0 to 2".
+fn indices(n_particles: usize) -> String {
+    match n_particles {
+        0 => "the scene has no particles".into(),
+        1 => "the scene has 1 particle: index 0".into(),
+        n => format!("the scene has {n} particles: indices 0 to {}", n - 1),
+    }
 }
 
 fn check_damping(p: &mut Problems, at: &str, c: Option<f64>) {
