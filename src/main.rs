@@ -731,16 +731,31 @@ fn gpu(out: &std::path::Path, widths: Vec<usize>, budget: f64, repeat: usize) ->
         Ok(r) => r,
         Err(e) => return fail(e),
     };
-    let frames = match gpu::run_frames(&card, &widths, budget, repeat, |w| eprintln!("  {w}")) {
-        Ok(r) => r,
-        Err(e) => return fail(e),
-    };
     let list: Vec<String> = widths.iter().map(|w| w.to_string()).collect();
     let command = format!(
         "hooke bench gpu --widths {} --budget {budget:e} --repeat {repeat}",
         list.join(",")
     );
-    let md = gpu::markdown(&rows, &machine, &command) + &gpu::frames_markdown(&frames);
+    // The spring-update table is written before XPBD's is measured, so that a run cut short
+    // (a card lent for minutes) keeps it.
+    let md = gpu::markdown(&rows, &machine, &command);
+    let first = [("gpu.csv", gpu::csv(&rows)), ("gpu.md", md.clone())];
+    let written = std::fs::create_dir_all(out).and_then(|()| {
+        first
+            .iter()
+            .try_for_each(|(n, t)| std::fs::write(out.join(n), t))
+    });
+    if let Err(e) = written {
+        return fail(format!(
+            "cannot write the report into {}: {e}",
+            out.display()
+        ));
+    }
+    let frames = match gpu::run_frames(&card, &widths, budget, repeat, |w| eprintln!("  {w}")) {
+        Ok(r) => r,
+        Err(e) => return fail(e),
+    };
+    let md = md + &gpu::frames_markdown(&frames);
     write_report(out, &[("gpu.csv", &gpu::csv(&rows)), ("gpu.md", &md)])
 }
 

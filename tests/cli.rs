@@ -709,3 +709,38 @@ fn run_on_the_gpu_reports_the_adapter_or_why_not() {
     assert!(json(&o).get("pass_seconds").is_none());
     assert!(stderr(&o).contains("--profile"), "{}", stderr(&o));
 }
+
+/// `hooke bench gpu` prints each figure as it measures it, so that a run on a lent card that
+/// is cut short keeps what it measured, and ends with both tables.
+#[test]
+fn bench_gpu_prints_each_figure_as_it_goes() {
+    if !cfg!(feature = "gpu") {
+        return;
+    }
+    let out = temp("bench-gpu");
+    let o = hooke(&[
+        "bench",
+        "gpu",
+        "--widths",
+        "8",
+        "--budget",
+        "1e4",
+        "--repeat",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    if o.status.code() == Some(2) && std::env::var_os("HOOKE_REQUIRE_GPU").is_none() {
+        println!("skipped: {}", stderr(&o));
+        return;
+    }
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    let figures = |needle: &str| e.lines().filter(|l| l.contains(needle)).count();
+    // The CPU, then the card's one step and all steps a submit in each precision it has.
+    assert!(figures("M spring updates/s") >= 3, "{e}");
+    // XPBD without contact and with pairs, each on the CPU and the card.
+    assert_eq!(figures("ms a step"), 4, "{e}");
+    let md = std::fs::read_to_string(out.join("gpu.md")).unwrap();
+    assert!(md.contains("M spring updates/s") && md.contains("## XPBD at a frame's step"));
+}

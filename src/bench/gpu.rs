@@ -33,6 +33,30 @@ pub struct Row {
 }
 
 impl Row {
+    /// The figure in a line, for the progress log: a run cut short still leaves what it
+    /// measured.
+    pub fn line(&self) -> String {
+        match &self.note {
+            Some(why) => format!(
+                "cloth{}: {}, {}: {why}",
+                self.width, self.device, self.precision
+            ),
+            None => format!(
+                "cloth{}: {}, {}, {} a submit: {:.0} M spring updates/s, {:.2} µs a step",
+                self.width,
+                self.device,
+                self.precision,
+                if self.per_submit == 0 {
+                    "-".to_string()
+                } else {
+                    self.per_submit.to_string()
+                },
+                self.rate_m(),
+                self.us_per_step()
+            ),
+        }
+    }
+
     /// Million spring updates per second.
     pub fn rate_m(&self) -> f64 {
         self.springs as f64 * self.steps as f64 / self.wall_s / 1e6
@@ -82,6 +106,7 @@ pub fn run(
             wall_s: best,
             note: None,
         });
+        progress(&rows[rows.len() - 1].line());
         let params = world.resource::<SimParams>().clone();
         let settings = sim::gpu::settings(&params, steps);
         for precision in gpu.precisions() {
@@ -140,6 +165,7 @@ pub fn run(
                     wall_s: best,
                     note: None,
                 });
+                progress(&rows[rows.len() - 1].line());
             }
         }
     }
@@ -173,6 +199,22 @@ pub const PAIR_RADIUS: f64 = 0.45;
 pub const PAIRS_UP_TO: usize = 1024;
 
 impl FrameRow {
+    /// The figure in a line, for the progress log.
+    pub fn line(&self) -> String {
+        let what = if self.pairs {
+            "with pairs"
+        } else {
+            "without contact"
+        };
+        format!(
+            "cloth{}: XPBD at 1/60 s {what}, {}, {}: {:.2} ms a step",
+            self.width,
+            self.device,
+            self.precision,
+            self.ms_per_step()
+        )
+    }
+
     /// Milliseconds a step.
     pub fn ms_per_step(&self) -> f64 {
         self.wall_s * 1e3 / self.steps as f64
@@ -239,6 +281,7 @@ pub fn run_frames(
             wall_s: best,
             pairs,
         });
+        progress(&rows[rows.len() - 1].line());
         let settings = sim::gpu::settings(&params, steps);
         let made = GpuStep::new(
             gpu,
@@ -273,6 +316,7 @@ pub fn run_frames(
             wall_s: best,
             pairs,
         });
+        progress(&rows[rows.len() - 1].line());
     }
     Ok(rows)
 }
