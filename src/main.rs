@@ -739,24 +739,16 @@ fn gpu(out: &std::path::Path, widths: Vec<usize>, budget: f64, repeat: usize) ->
     // The spring-update table is written before XPBD's is measured, so that a run cut short
     // (a card lent for minutes) keeps it.
     let md = gpu::markdown(&rows, &machine, &command);
-    let first = [("gpu.csv", gpu::csv(&rows)), ("gpu.md", md.clone())];
-    let written = std::fs::create_dir_all(out).and_then(|()| {
-        first
-            .iter()
-            .try_for_each(|(n, t)| std::fs::write(out.join(n), t))
-    });
-    if let Err(e) = written {
-        return fail(format!(
-            "cannot write the report into {}: {e}",
-            out.display()
-        ));
+    let csv = gpu::csv(&rows);
+    if let Err(e) = write_files(out, &[("gpu.csv", &csv), ("gpu.md", &md)]) {
+        return fail(e);
     }
     let frames = match gpu::run_frames(&card, &widths, budget, repeat, |w| eprintln!("  {w}")) {
         Ok(r) => r,
         Err(e) => return fail(e),
     };
     let md = md + &gpu::frames_markdown(&frames);
-    write_report(out, &[("gpu.csv", &gpu::csv(&rows)), ("gpu.md", &md)])
+    write_report(out, &[("gpu.csv", &csv), ("gpu.md", &md)])
 }
 
 #[cfg(not(feature = "gpu"))]
@@ -764,22 +756,26 @@ fn gpu(_: &std::path::Path, _: Vec<usize>, _: f64, _: usize) -> ExitCode {
     fail("bench gpu: this hooke was built without the `gpu` feature (build with `--features gpu`)")
 }
 
+/// Writes a report's files into `out`, then prints the last of them (its markdown).
 fn write_report(out: &std::path::Path, files: &[(&str, &str)]) -> ExitCode {
-    let written = std::fs::create_dir_all(out).and_then(|()| {
-        files
-            .iter()
-            .try_for_each(|(name, text)| std::fs::write(out.join(name), text))
-    });
-    if let Err(e) = written {
-        return fail(format!(
-            "cannot write the report into {}: {e}",
-            out.display()
-        ));
+    if let Err(e) = write_files(out, files) {
+        return fail(e);
     }
     if let Some((_, text)) = files.last() {
         println!("{text}");
     }
     ExitCode::SUCCESS
+}
+
+/// Writes each (name, text) into `out`, made if missing; the error names the folder.
+fn write_files(out: &std::path::Path, files: &[(&str, &str)]) -> Result<(), String> {
+    std::fs::create_dir_all(out)
+        .and_then(|()| {
+            files
+                .iter()
+                .try_for_each(|(name, text)| std::fs::write(out.join(name), text))
+        })
+        .map_err(|e| format!("cannot write the report into {}: {e}", out.display()))
 }
 
 #[cfg(feature = "gui")]
