@@ -748,7 +748,7 @@ fn gpu(out: &std::path::Path, widths: Vec<usize>, budget: f64, repeat: usize) ->
         Err(e) => return fail(e),
     };
     let md = md + &gpu::frames_markdown(&frames);
-    write_report(out, &[("gpu.csv", &csv), ("gpu.md", &md)])
+    write_report(out, &[("gpu.md", &md)])
 }
 
 #[cfg(not(feature = "gpu"))]

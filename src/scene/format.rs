@@ -6,16 +6,16 @@
 use crate::sim::Integrator;
 use serde::{Deserialize, Serialize};
 
-/// A scene as written in a `.ron` file.
+/// A scene as written in a `.ron` file. A field left out takes [`Scene::default`]'s value, the
+/// app's own (`SimParams::default`), so that a file of a generator alone runs as the app would
+/// run it.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(default, deny_unknown_fields)]
 pub struct Scene {
     /// Gravitational acceleration (x, y), m/s²; default (0, −9.8).
-    #[serde(default = "default_gravity")]
     pub gravity: (f64, f64),
     /// Velocity damping rate μ, 1/s (0 = off): air drag, which slows every motion alike;
     /// default 10, the app's.
-    #[serde(default = "default_damping")]
     pub damping: f64,
     /// The dashpot c (N·s/m) of every spring without a `damping` of its own; default 0 (off).
     #[serde(default, skip_serializing_if = "is_zero")]
@@ -25,13 +25,10 @@ pub struct Scene {
     #[serde(default, skip_serializing_if = "is_false")]
     pub drag_in_solve: bool,
     /// Height of the ground; `None` = no ground; default 0.
-    #[serde(default = "default_ground")]
     pub ground: Option<f64>,
     /// The time integrator; default symplectic Euler.
-    #[serde(default = "default_integrator")]
     pub integrator: Integrator,
     /// Time step, s; default 1e-4.
-    #[serde(default = "default_dt")]
     pub dt: f64,
     #[serde(default)]
     /// Explicit particles, indexed from 0.
@@ -465,24 +462,6 @@ fn default_stiffness() -> f64 {
 }
 fn default_radius() -> f64 {
     0.15
-}
-// A scene's parameters left out take the app's own defaults (`SimParams::default`), so that a
-// file of a generator alone runs as the app would run it.
-fn default_gravity() -> (f64, f64) {
-    let g = crate::sim::SimParams::default().gravity;
-    (g.x, g.y)
-}
-fn default_damping() -> f64 {
-    crate::sim::SimParams::default().damping
-}
-fn default_ground() -> Option<f64> {
-    crate::sim::SimParams::default().ground
-}
-fn default_integrator() -> Integrator {
-    crate::sim::SimParams::default().integrator
-}
-fn default_dt() -> f64 {
-    crate::sim::SimParams::default().dt
 }
 fn default_true() -> bool {
     true
