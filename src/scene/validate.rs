@@ -391,9 +391,10 @@ impl Problems {
 fn check_bodies(p: &mut Problems, bodies: &[super::format::BodyDef]) {
     if !bodies.is_empty() && !cfg!(feature = "avian") {
         p.push(format!(
-            "bodies: {} rigid bodies, but this build of hooke has no rigid bodies (build it with \
+            "bodies: {} rigid {}, but this build of hooke has no rigid bodies (build it with \
              the `avian` feature, as the default build is)",
-            bodies.len()
+            bodies.len(),
+            if bodies.len() == 1 { "body" } else { "bodies" }
         ));
         return;
     }

@@ -62,6 +62,19 @@ pub fn app_with(scene: Scene) -> App {
     app
 }
 
+/// A shipped or shown scene, loaded; `None` where this build has no rigid bodies and the
+/// scene has some: such a build refuses it, naming the feature it lacks, which is checked here
+/// (`cargo test --no-default-features` runs the rest).
+pub fn unless_it_needs_avian(
+    loaded: Result<LoadedScene, hooke::scene::SceneError>,
+    name: &str,
+) -> Option<LoadedScene> {
+    match loaded {
+        Err(e) if !cfg!(feature = "avian") && e.to_string().contains("`avian` feature") => None,
+        loaded => Some(loaded.unwrap_or_else(|e| panic!("{name}: {e}"))),
+    }
+}
+
 pub fn step(app: &mut App, steps: u64) {
     let taken = sim::advance(app.world_mut(), steps);
     assert_eq!(taken, steps, "the simulation stopped early");
