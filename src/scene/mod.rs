@@ -6,6 +6,7 @@ pub mod generate;
 pub mod load;
 pub mod presets;
 mod reserve;
+mod start_apart;
 mod typo;
 pub mod validate;
 

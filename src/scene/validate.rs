@@ -267,57 +267,11 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
         return Err(p.finish());
     }
     if let Some(c) = scene.contact.filter(|c| c.particles && c.radius > 0.0)
-        && let Some(problem) = pairs_start_apart(scene, c.radius)
+        && let Some(problem) = super::start_apart::pairs_start_apart(scene, c.radius)
     {
         return Err(vec![problem]);
     }
     Ok(())
-}
-
-/// With particle pairs colliding, every pair not joined by a spring must start at least 2r
-/// apart: one closer is pushed apart at the first step, with all the energy that takes (a 32²
-/// cloth at r = 0.05, 1.6 of its spacing, went from 5,000 J to 150,000 J in a second). Names
-/// the closest such pair and the largest radius that leaves every one apart.
-fn pairs_start_apart(scene: &Scene, radius: f64) -> Option<String> {
-    use std::collections::{HashMap, HashSet};
-    let e = scene.expand();
-    let reach = 2.0 * radius;
-    let cell = |p: (f64, f64)| ((p.0 / reach).floor() as i64, (p.1 / reach).floor() as i64);
-    let mut grid: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
-    for (i, p) in e.particles.iter().enumerate() {
-        grid.entry(cell(p.pos)).or_default().push(i);
-    }
-    let joined: HashSet<(usize, usize)> = e
-        .springs
-        .iter()
-        .map(|s| (s.a.min(s.b), s.a.max(s.b)))
-        .collect();
-    // The closest pair within 2r (every such pair is in neighbouring cells).
-    let mut closest: Option<(f64, usize, usize)> = None;
-    for (i, p) in e.particles.iter().enumerate() {
-        let (cx, cy) = cell(p.pos);
-        for (dx, dy) in (-1..=1).flat_map(|a| (-1..=1).map(move |b| (a, b))) {
-            for &j in grid.get(&(cx + dx, cy + dy)).into_iter().flatten() {
-                let q = e.particles[j].pos;
-                let d = (p.pos.0 - q.0).hypot(p.pos.1 - q.1);
-                if j > i
-                    && d < reach
-                    && !joined.contains(&(i, j))
-                    && closest.is_none_or(|c| d < c.0)
-                {
-                    closest = Some((d, i, j));
-                }
-            }
-        }
-    }
-    let (d, i, j) = closest?;
-    Some(format!(
-        "contact.radius: particles {i} and {j} start {d:.4} m apart with no spring between \
-         them, closer than 2 × radius = {reach:.4} m, and contact would push them apart at the \
-         first step; with particles: true the radius must be under half the distance of every \
-         such pair: at most {:.4} here",
-        0.5 * d
-    ))
 }
 
 /// The valid indices, for an index out of range: "the scene has 3 particles: indices 0 to 2".
