@@ -48,6 +48,7 @@ fn any_unjoined(
     within: f64,
     visits: &mut usize,
 ) -> Option<()> {
+    // Far from the origin the cells saturate at i64's ends, and their neighbours with them.
     let cell = |p: (f64, f64)| ((p.0 / within).floor() as i64, (p.1 / within).floor() as i64);
     let mut grid: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
     for (i, &p) in positions.iter().enumerate() {
@@ -56,7 +57,11 @@ fn any_unjoined(
     for (i, &p) in positions.iter().enumerate() {
         let (cx, cy) = cell(p);
         for (dx, dy) in (-1..=1).flat_map(|a| (-1..=1).map(move |b| (a, b))) {
-            for &j in grid.get(&(cx + dx, cy + dy)).into_iter().flatten() {
+            for &j in grid
+                .get(&(cx.saturating_add(dx), cy.saturating_add(dy)))
+                .into_iter()
+                .flatten()
+            {
                 *visits += 1;
                 let q = positions[j];
                 if j > i && (p.0 - q.0).hypot(p.1 - q.1) < within && !joined.contains(&(i, j)) {
@@ -98,9 +103,10 @@ fn closest_unjoined(
     let mut oldest = 0;
     let mut best = within;
     let mut closest = None;
-    for &i in &by_x {
+    for (k, &i) in by_x.iter().enumerate() {
         let (x, y) = positions[i];
-        while positions[by_x[oldest]].0 <= x - best {
+        // By the difference, not `x - best`: far from 0 that rounds to x itself.
+        while oldest < k && x - positions[by_x[oldest]].0 >= best {
             window.remove(&(ordered(positions[by_x[oldest]].1), by_x[oldest]));
             oldest += 1;
         }
@@ -137,17 +143,19 @@ mod tests {
 
     /// The sweep finds the closest pair without a spring, as every pair compared finds it: on
     /// clouds with springs among the close pairs, particles on one vertical or horizontal
-    /// line (the sweep's ties in x and y) and coincident ones.
+    /// line (the sweep's ties in x and y), coincident ones and ones at x = 1e300.
     #[test]
     fn the_closest_pair_without_a_spring_is_the_closest() {
         let mut seed = 7;
         for cloud in 0..300 {
             let n = 2 + cloud % 60;
             let positions: Vec<(f64, f64)> = (0..n)
-                .map(|k| match cloud % 5 {
+                .map(|k| match cloud % 6 {
                     0 => (0.5, lcg(&mut seed)),
                     1 => (lcg(&mut seed), 0.25),
                     2 if k % 7 == 3 => (0.5, 0.5),
+                    // Far from the origin, where x - within rounds to x.
+                    3 if k % 5 == 1 => (1e300, lcg(&mut seed)),
                     _ => (lcg(&mut seed), lcg(&mut seed)),
                 })
                 .collect();
