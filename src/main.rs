@@ -369,6 +369,7 @@ fn run(args: RunArgs) -> ExitCode {
         separate_passes: args.separate_passes,
         device: args.device,
         gpu_precision: args.gpu_precision,
+        progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
     };
     let run = match runner::run(&loaded, &overrides, duration) {
         Ok(r) => r,

@@ -3,6 +3,7 @@
 use crate::scene::{LoadedScene, load_into_world};
 use crate::sim::{self, Integrator, SimClock, SimParams, SimStatus, Solver};
 use crate::solver::MAX_THREADS;
+use bevy::ecs::world::World;
 use serde::Serialize;
 use std::io::Write;
 use std::path::Path;
@@ -89,6 +90,11 @@ pub struct Overrides {
     pub device: Device,
     /// The card's number width, with `device` the GPU.
     pub gpu_precision: GpuPrecision,
+    /// Show the run's progress on stderr, on one line rewritten in place, once it has run a
+    /// second (`hooke run` sets it where stderr is a terminal). The CPU's steps then run in
+    /// stretches of whole ticks, and the card's tell after each read-back, so the result is
+    /// the same bit for bit.
+    pub progress: bool,
 }
 
 impl Overrides {
@@ -355,10 +361,9 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
         Device::Gpu => gpu::card(world, overrides.gpu_precision, &mut on)?,
     };
     let start = Instant::now();
-    let taken = match &card {
-        None => sim::advance(world, steps),
-        Some(card) => gpu::advance(world, card, steps)?,
-    };
+    let mut progress = overrides.progress.then(|| Progress::new(steps));
+    let taken = advance(world, card.as_ref(), steps, progress.as_mut())?;
+    drop(progress);
     // The step's own time: the energy peak's evaluations are kept apart.
     let peak = *world.resource::<sim::watch::EnergyPeak>();
     let wall_s = (start.elapsed().as_secs_f64() - peak.seconds).max(0.0);
@@ -423,6 +428,99 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
     Ok(Run { report, app })
 }
 
+/// `steps` steps, on the card where there is one; with `progress`, telling it how far the run
+/// is as it goes.
+fn advance(
+    world: &mut World,
+    card: Option<&gpu::Card>,
+    steps: u64,
+    progress: Option<&mut Progress>,
+) -> Result<u64, String> {
+    match (card, progress) {
+        (None, None) => Ok(sim::advance(world, steps)),
+        (None, Some(progress)) => Ok(advance_in_stretches(world, steps, progress)),
+        (Some(card), None) => gpu::advance(world, card, steps, |_| {}),
+        (Some(card), Some(progress)) => gpu::advance(world, card, steps, |t| progress.note(t)),
+    }
+}
+
+/// [`sim::advance`] in stretches of whole ticks of about half a second each, so that the
+/// result is that of a single stretch, bit for bit, and `progress` hears after each.
+fn advance_in_stretches(world: &mut World, steps: u64, progress: &mut Progress) -> u64 {
+    let tick = sim::steps_per_tick(world).max(1);
+    let mut taken = 0;
+    let mut stretch = tick;
+    while taken < steps {
+        let n = stretch.min(steps - taken);
+        let start = Instant::now();
+        let done = sim::advance(world, n);
+        taken += done;
+        if done < n {
+            break;
+        }
+        progress.note(taken);
+        // The next: about half a second, at most four times this one, in whole ticks.
+        let seconds = start.elapsed().as_secs_f64().max(1e-6);
+        let aim = (n as f64 * 0.5 / seconds).min(4.0 * n as f64);
+        stretch = ((aim / tick as f64).floor() as u64).max(1) * tick;
+    }
+    taken
+}
+
+/// A run's progress, on one line of stderr rewritten in place: from a second into the run, at
+/// most twice a second, how many steps are done and about how long the rest will take. The
+/// line is erased when the run ends.
+struct Progress {
+    steps: u64,
+    start: Instant,
+    shown: Option<Instant>,
+}
+
+impl Progress {
+    fn new(steps: u64) -> Self {
+        Progress {
+            steps,
+            start: Instant::now(),
+            shown: None,
+        }
+    }
+
+    fn note(&mut self, taken: u64) {
+        let elapsed = self.start.elapsed().as_secs_f64();
+        let due = self.shown.is_none_or(|t| t.elapsed().as_secs_f64() >= 0.5);
+        if elapsed < 1.0 || !due || taken == 0 || taken >= self.steps {
+            return;
+        }
+        let left = elapsed * (self.steps - taken) as f64 / taken as f64;
+        eprint!(
+            "\rstep {taken} of {} ({:.1} %), {} so far, about {} left\x1b[K",
+            self.steps,
+            100.0 * taken as f64 / self.steps as f64,
+            seconds_in_words(elapsed),
+            seconds_in_words(left)
+        );
+        self.shown = Some(Instant::now());
+    }
+}
+
+impl Drop for Progress {
+    fn drop(&mut self) {
+        if self.shown.is_some() {
+            eprint!("\r\x1b[K");
+        }
+    }
+}
+
+/// "42 s", "3 min 5 s", "2 h 10 min": a duration as a person reads it.
+fn seconds_in_words(seconds: f64) -> String {
+    let s = seconds.round() as u64;
+    match s {
+        0..60 => format!("{s} s"),
+        60..3600 => format!("{} min {} s", s / 60, s % 60),
+        _ => format!("{} h {} min", s / 3600, s % 3600 / 60),
+    }
+}
+
 /// Where a run's steps ran, for its report.
 #[derive(Debug, Default)]
 struct OnDevice {
@@ -440,13 +538,16 @@ mod gpu {
     use crate::solver::gpu::{Gpu, Precision};
     use bevy::ecs::world::World;
 
+    /// The card and the width it computes in.
+    pub(super) type Card = (Gpu, Precision);
+
     /// The card to run on and its precision, or `None` (with `on.note` saying why) when the
     /// scene needs what the card does not run; an error when there is no card.
     pub(super) fn card(
         world: &mut World,
         precision: GpuPrecision,
         on: &mut OnDevice,
-    ) -> Result<Option<(Gpu, Precision)>, String> {
+    ) -> Result<Option<Card>, String> {
         world
             .run_system_cached(sim::obstacles::gather_obstacles)
             .map_err(|e| e.to_string())?;
@@ -474,13 +575,14 @@ mod gpu {
         Ok(Some((gpu, precision)))
     }
 
-    /// The steps on the card.
+    /// The steps on the card; `after_read` hears the steps taken after each read-back.
     pub(super) fn advance(
         world: &mut World,
-        (gpu, precision): &(Gpu, Precision),
+        (gpu, precision): &Card,
         steps: u64,
+        after_read: impl FnMut(u64),
     ) -> Result<u64, String> {
-        sim::gpu::advance_on_gpu(world, gpu, *precision, steps)
+        sim::gpu::advance_on_gpu_telling(world, gpu, *precision, steps, after_read)
     }
 }
 
@@ -490,11 +592,14 @@ mod gpu {
     use super::{GpuPrecision, OnDevice};
     use bevy::ecs::world::World;
 
+    /// No card: a build without the `gpu` feature has none to run on.
+    pub(super) type Card = std::convert::Infallible;
+
     pub(super) fn card(
         _: &mut World,
         _: GpuPrecision,
         _: &mut OnDevice,
-    ) -> Result<Option<std::convert::Infallible>, String> {
+    ) -> Result<Option<Card>, String> {
         Err(
             "--device gpu: this hooke was built without the `gpu` feature (build with \
              `--features gpu`)"
@@ -504,8 +609,9 @@ mod gpu {
 
     pub(super) fn advance(
         _: &mut World,
-        card: &std::convert::Infallible,
+        card: &Card,
         _: u64,
+        _: impl FnMut(u64),
     ) -> Result<u64, String> {
         match *card {}
     }

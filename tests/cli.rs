@@ -744,3 +744,66 @@ fn bench_gpu_prints_each_figure_as_it_goes() {
     let md = std::fs::read_to_string(out.join("gpu.md")).unwrap();
     assert!(md.contains("M spring updates/s") && md.contains("## XPBD at a frame's step"));
 }
+
+/// With stderr a terminal, `hooke run` steps in stretches of whole ticks and says how far it
+/// is after each; the result is that of one stretch, bit for bit: the pile of boxes (contact
+/// between particles, walls) with its springs tearing, XPBD at a frame's step, the crates
+/// (rigid bodies: a tick of one step) where the build has them, and the pile on the card
+/// where there is one (its run tells after each read-back).
+#[test]
+fn a_run_in_stretches_ends_where_a_run_in_one_does() {
+    use hooke::runner::{Duration, Overrides, run};
+    use hooke::scene::presets;
+    let mut cases = vec![
+        (
+            "pile",
+            Overrides {
+                tear: Some(0.05),
+                ..Default::default()
+            },
+            30_000,
+        ),
+        (
+            "folding_cloth",
+            Overrides {
+                integrator: Some(hooke::sim::Integrator::Xpbd),
+                dt: Some(1.0 / 60.0),
+                ..Default::default()
+            },
+            120,
+        ),
+    ];
+    if cfg!(feature = "avian") {
+        cases.push(("crates", Overrides::default(), 3000));
+    }
+    #[cfg(feature = "gpu")]
+    if hooke::solver::gpu::Gpu::open().is_ok() {
+        let on_card = Overrides {
+            device: hooke::runner::Device::Gpu,
+            tear: Some(0.05),
+            ..Default::default()
+        };
+        cases.push(("pile", on_card, 3000));
+    }
+    for (name, overrides, steps) in cases {
+        let loaded = presets::resolve(name).unwrap();
+        let whole = run(&loaded, &overrides, Duration::Steps(steps)).unwrap();
+        let in_stretches = Overrides {
+            progress: true,
+            ..overrides.clone()
+        };
+        let stretched = run(&loaded, &in_stretches, Duration::Steps(steps)).unwrap();
+        let (a, b) = (whole.solver(), stretched.solver());
+        assert_eq!(stretched.report.steps_taken, steps, "{name}");
+        assert_eq!(a.x(), b.x(), "{name} on {:?}: positions", overrides.device);
+        assert_eq!(a.v(), b.v(), "{name} on {:?}: velocities", overrides.device);
+        assert_eq!(
+            stretched.report.springs_torn, whole.report.springs_torn,
+            "{name}"
+        );
+        println!(
+            "{name} on {:?}: {} springs torn",
+            overrides.device, whole.report.springs_torn
+        );
+    }
+}

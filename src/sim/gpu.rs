@@ -184,6 +184,18 @@ pub fn advance_on_gpu(
     precision: Precision,
     steps: u64,
 ) -> Result<u64, String> {
+    advance_on_gpu_telling(world, gpu, precision, steps, |_| {})
+}
+
+/// [`advance_on_gpu`], calling `after_read` with the steps taken so far after each read-back
+/// (`hooke run`'s progress line): the card's run is the same, bit for bit.
+pub fn advance_on_gpu_telling(
+    world: &mut World,
+    gpu: &Gpu,
+    precision: Precision,
+    steps: u64,
+    mut after_read: impl FnMut(u64),
+) -> Result<u64, String> {
     // The obstacles as the tick gathers them from their entities (and writes back after).
     let mut card = card_for(world, gpu, precision)?;
     let mut taken = 0;
@@ -201,6 +213,7 @@ pub fn advance_on_gpu(
         if !take_state(world, &card, &mut torn)? {
             break;
         }
+        after_read(taken);
     }
     world
         .run_system_cached(super::obstacles::write_back_obstacles)

@@ -34,7 +34,7 @@ pub use profile::PassTimes;
 pub use pull::Attraction;
 pub use schedule::{
     ParticleSweep, PhysicsStep, PhysicsSystems, SimPlugin, StepBudget, StepSystems, advance, check,
-    pack,
+    pack, steps_per_tick,
 };
 #[allow(deprecated)]
 pub use schedule::{PhysicsSet, StepSet};

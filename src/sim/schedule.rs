@@ -747,23 +747,30 @@ fn mark_frame_end(mut budget: ResMut<StepBudget>) {
     budget.frame_end = Some(Instant::now());
 }
 
+/// The steps in one of [`advance`]'s ticks: with rigid bodies coupled, one (a tick is one step
+/// of both engines); otherwise [`TickPlan::target_tick_seconds`] of simulated time. Two runs
+/// of `advance` in whole ticks end where one run of their sum does, bit for bit.
+pub fn steps_per_tick(world: &World) -> u64 {
+    #[cfg(feature = "avian")]
+    if super::avian::coupled(world) {
+        return 1;
+    }
+    let dt = world.resource::<SimParams>().dt;
+    world.resource::<TickPlan>().steps_at(dt)
+}
+
 /// Runs `steps` steps of the simulation directly, through the same fixed-tick systems the app
 /// runs (sync, step sets, writeback, and the energy watch when present), in ticks of the app's
 /// size ([`TickPlan::target_tick_seconds`] of simulated time), for headless use: the CLI,
 /// benchmarks, tests. Returns the number of steps taken: fewer when paused or when a step blew up.
 pub fn advance(world: &mut World, steps: u64) -> u64 {
     let start = world.resource::<SimClock>().steps;
-    let dt = world.resource::<SimParams>().dt;
-    // With rigid bodies coupled, a tick is one step of both engines.
     #[cfg(feature = "avian")]
-    let coupled = super::avian::coupled(world);
-    #[cfg(not(feature = "avian"))]
-    let coupled = false;
-    let per_tick = if coupled {
-        1
-    } else {
-        world.resource::<TickPlan>().steps_at(dt)
-    };
+    let (coupled, dt) = (
+        super::avian::coupled(world),
+        world.resource::<SimParams>().dt,
+    );
+    let per_tick = steps_per_tick(world);
     let mut remaining = steps;
     while remaining > 0 {
         let n = remaining.min(per_tick);
