@@ -103,6 +103,9 @@ impl Overrides {
         if let Some(dt) = self.dt.filter(|d| !(d.is_finite() && *d > 0.0)) {
             return Err(format!("--dt must be finite and > 0, got {dt}"));
         }
+        if let Some(dt) = self.dt.filter(|d| *d > sim::MAX_DT) {
+            return Err(format!("--dt must be at most 1e9 s, got {dt}"));
+        }
         if let Some(k) = self.stiffness.filter(|k| !(k.is_finite() && *k >= 0.0)) {
             return Err(format!("--stiffness must be finite and >= 0, got {k}"));
         }

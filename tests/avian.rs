@@ -606,6 +606,36 @@ fn a_scene_with_bodies_runs_rests_and_saves_back() {
     assert_eq!(heights(&mut again), after);
 }
 
+/// A dt that no clock holds (NaN, 0, 1e19 s over `MAX_DT`), written into a running world
+/// with rigid bodies, pauses it with the field named and the bodies where they were, as a bad
+/// dt does without them; avian's clock panicked at each before the check ran.
+#[test]
+fn a_step_no_clock_holds_pauses_with_its_name() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/crates.ron");
+    let loaded = hooke::scene::LoadedScene::read(&path).unwrap_or_else(|e| panic!("{e}"));
+    for dt in [f64::NAN, 0.0, 1e19] {
+        let mut app = hooke::running_app(&loaded).unwrap();
+        hooke::sim::advance(app.world_mut(), 10);
+        let w = app.world_mut();
+        let bodies =
+            |w: &mut World| -> Vec<Vec2> { w.query::<&Position>().iter(w).map(|p| p.0).collect() };
+        let before = bodies(w);
+        w.resource_mut::<SimParams>().dt = dt;
+        assert_eq!(hooke::sim::advance(w, 10), 0, "dt {dt}");
+        match *w.resource::<hooke::sim::SimStatus>() {
+            hooke::sim::SimStatus::InvalidInput(p) => {
+                assert_eq!(p.field, "SimParams.dt", "{p}");
+            }
+            other => panic!("dt {dt}: not paused on it: {other:?}"),
+        }
+        assert_eq!(bodies(w), before, "dt {dt}");
+        // Mended, it runs on.
+        w.resource_mut::<SimParams>().dt = loaded.scene.dt;
+        w.resource_mut::<SimParams>().paused = false;
+        assert_eq!(hooke::sim::advance(w, 10), 10, "dt {dt}: mended");
+    }
+}
+
 /// A body's bad values and misspelled fields are named, with where they are.
 #[test]
 fn a_bad_body_is_named() {

@@ -273,8 +273,9 @@ fn large_step_methods_report_their_iterations() {
 
 #[test]
 fn bad_flags() {
-    let cases: [(&[&str], &str); 14] = [
+    let cases: [(&[&str], &str); 15] = [
         (&["--dt", "-1"], "--dt must be finite and > 0, got -1"),
+        (&["--dt", "1e19"], "--dt must be at most 1e9 s, got 1e19"),
         (
             &["--threads", "0"],
             "--threads must be between 1 and 256, got 0",
@@ -415,7 +416,7 @@ fn every_bad_scene_case_through_the_cli() {
     let good = "(gravity: (0.0, -9.8), damping: 10.0, ground: Some(0.0), integrator: SymplecticEuler, \
                 dt: 0.0001, particles: [(pos: (0.5, 0.9), mass: 1.0, pinned: true), \
                 (pos: (0.5, 0.8), mass: 1.0)], springs: [(a: 0, b: 1, stiffness: 10000.0, rest: 0.1)])";
-    let cases: [(&str, &str, &str); 10] = [
+    let cases: [(&str, &str, &str); 11] = [
         ("b: 1,", "b: 5,", "springs[0]: b = 5 is out of range"),
         ("a: 0, b: 1", "a: 1, b: 1", "springs[0]: a and b are both 1"),
         (
@@ -430,6 +431,7 @@ fn every_bad_scene_case_through_the_cli() {
         ),
         ("dt: 0.0001", "dt: 0.0", "dt: must be finite and > 0"),
         ("dt: 0.0001", "dt: inf", "dt: must be finite and > 0"),
+        ("dt: 0.0001", "dt: 1e19", "dt: must be at most 1e9 s"),
         (
             "stiffness: 10000.0",
             "stiffness: -1.0",

@@ -295,6 +295,8 @@ fn bad_dt() {
         let msg = invalid(|s| s.replace("dt: 0.0001", &format!("dt: {bad}")));
         assert!(msg.contains("dt: must be finite and > 0"), "{bad}: {msg}");
     }
+    let msg = invalid(|s| s.replace("dt: 0.0001", "dt: 18446744073709551615"));
+    assert!(msg.contains("dt: must be at most 1e9 s"), "{msg}");
 }
 
 #[test]

@@ -39,6 +39,9 @@ pub fn check_params(p: &SimParams) -> Option<InputProblem> {
     if bad_positive(p.dt) {
         return Some(problem("SimParams.dt", p.dt, POSITIVE));
     }
+    if p.dt > super::params::MAX_DT {
+        return Some(problem("SimParams.dt", p.dt, "must be at most 1e9 s"));
+    }
     for (field, v) in [
         ("SimParams.gravity.x", p.gravity.x),
         ("SimParams.gravity.y", p.gravity.y),

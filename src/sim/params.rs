@@ -89,7 +89,7 @@ pub struct SimParams {
     pub ground: Option<f64>,
     /// The time integrator.
     pub integrator: Integrator,
-    /// Time step, s.
+    /// Time step, s: above 0 and at most [`MAX_DT`].
     pub dt: f64,
     /// While set, no step runs (the app's G key).
     pub paused: bool,
@@ -242,6 +242,11 @@ pub struct Tearing {
     /// Springs found overstretched this tick, not yet removed.
     pub pending: Vec<Entity>,
 }
+
+/// The longest time step, s (32 years). Bevy's clocks, avian's among them, hold a step as
+/// whole nanoseconds with a u64 of seconds; a step of 1e19 s does not fit, and the clock of a
+/// scene with rigid bodies panicked at it.
+pub const MAX_DT: f64 = 1e9;
 
 /// What is wrong with an input.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -771,6 +771,13 @@ pub fn advance(world: &mut World, steps: u64) -> u64 {
         world.resource::<SimParams>().dt,
     );
     let per_tick = steps_per_tick(world);
+    // A dt that avian's clock cannot hold (NaN, not above 0, over `MAX_DT`) is the input
+    // check's to name before the clock takes it: the tick would check it only after.
+    #[cfg(feature = "avian")]
+    if coupled && !(dt > 0.0 && dt <= super::params::MAX_DT) {
+        check_tick(world);
+        return 0;
+    }
     let mut remaining = steps;
     while remaining > 0 {
         let n = remaining.min(per_tick);

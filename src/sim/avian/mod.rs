@@ -195,7 +195,8 @@ fn one_clock(
 /// step in the tick is dt long. Returns the clock to put back after the tick.
 pub(crate) fn enter_tick(world: &mut World, dt: f64) -> Time {
     let before = *world.resource::<Time>();
-    let step = std::time::Duration::from_secs_f64(dt);
+    // `advance` stops at a dt no clock holds before it comes here.
+    let step = std::time::Duration::try_from_secs_f64(dt).unwrap_or_default();
     let mut fixed = world.resource_mut::<Time<Fixed>>();
     fixed.set_timestep(step);
     fixed.advance_by(step);
