@@ -779,8 +779,54 @@ fn write_files(out: &std::path::Path, files: &[(&str, &str)]) -> Result<(), Stri
         .map_err(|e| format!("cannot write the report into {}: {e}", out.display()))
 }
 
+/// The scripted run's flags, checked before a window opens: a screenshot or report the app
+/// could not write, or a time it would never reach, is bad input named by its flag, not an
+/// error line from the renderer (or a run that never quits) after the window is up.
+#[cfg(feature = "gui")]
+fn check_scripted_run(args: &AppArgs) -> Result<(), String> {
+    for (flag, path) in [
+        ("--screenshot", &args.screenshot),
+        ("--report", &args.report),
+    ] {
+        let Some(path) = path else { continue };
+        let folder = path
+            .parent()
+            .filter(|f| !f.as_os_str().is_empty())
+            .unwrap_or(std::path::Path::new("."));
+        if !folder.is_dir() {
+            return Err(format!(
+                "{flag}: cannot write {}: there is no folder {}",
+                path.display(),
+                folder.display()
+            ));
+        }
+    }
+    if let Some(path) = &args.screenshot
+        && !path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("png"))
+    {
+        return Err(format!(
+            "--screenshot: screenshots are PNG files, and {} does not end in .png",
+            path.display()
+        ));
+    }
+    for (flag, seconds) in [
+        ("--screenshot-after", Some(args.screenshot_after)),
+        ("--exit-after", args.exit_after),
+    ] {
+        if let Some(s) = seconds.filter(|s| !(s.is_finite() && *s >= 0.0)) {
+            return Err(format!("{flag} must be finite and >= 0, got {s}"));
+        }
+    }
+    Ok(())
+}
+
 #[cfg(feature = "gui")]
 fn open_app(args: AppArgs) -> ExitCode {
+    if let Err(e) = check_scripted_run(&args) {
+        return fail(e);
+    }
     let loaded = match presets::resolve(&args.scene) {
         Ok(l) => l,
         Err(e) => return fail(e),

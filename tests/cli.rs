@@ -809,3 +809,75 @@ fn a_run_in_stretches_ends_where_a_run_in_one_does() {
         );
     }
 }
+
+/// The app's scripted-run flags are checked before a window opens (no display is needed to
+/// see it): a screenshot into a missing folder or not a PNG was an ERROR line of the renderer
+/// after the window was up, with an empty file left behind for the latter, and an
+/// `--exit-after nan` a run that never quit.
+#[cfg(feature = "gui")]
+#[test]
+fn scripted_run_flags_are_checked_before_a_window_opens() {
+    let missing = temp("missing-folder").join("shot.png");
+    let jpeg = temp("shot.jpg");
+    let missing_report = temp("missing-folder").join("status.json");
+    let cases: [(&[&str], &str); 5] = [
+        (
+            &["--screenshot", missing.to_str().unwrap()],
+            "--screenshot: cannot write",
+        ),
+        (
+            &["--screenshot", jpeg.to_str().unwrap()],
+            "does not end in .png",
+        ),
+        (
+            &["--report", missing_report.to_str().unwrap()],
+            "--report: cannot write",
+        ),
+        (
+            &["--exit-after", "nan"],
+            "--exit-after must be finite and >= 0, got NaN",
+        ),
+        (
+            &["--screenshot-after", "inf"],
+            "--screenshot-after must be finite and >= 0",
+        ),
+    ];
+    for (flags, needle) in cases {
+        let o = Command::new(env!("CARGO_BIN_EXE_hooke"))
+            .args(flags)
+            .env_remove("DISPLAY")
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .unwrap();
+        assert_bad_input(&o, needle);
+    }
+    assert!(!jpeg.exists(), "no file is left behind");
+}
+
+/// The app where no window can open: no DISPLAY (a shell over SSH), or one that does not
+/// answer. bevy_winit panics building its event loop; hooke says why in a line, points to
+/// what runs without a window and exits 2, instead of a panic with a backtrace.
+#[cfg(feature = "gui")]
+#[test]
+fn the_app_without_a_display_says_so() {
+    for (display, needle) in [
+        (None, "no window can open here: DISPLAY is not set"),
+        (Some(":9999"), "the X display :9999 does not answer"),
+    ] {
+        let mut command = Command::new(env!("CARGO_BIN_EXE_hooke"));
+        command
+            .args(["--scene", "rope"])
+            .env_remove("WAYLAND_DISPLAY");
+        match display {
+            Some(d) => command.env("DISPLAY", d),
+            None => command.env_remove("DISPLAY"),
+        };
+        let o = command.output().unwrap();
+        assert_bad_input(&o, needle);
+        assert!(
+            stderr(&o).contains("hooke run --scene NAME"),
+            "{}",
+            stderr(&o)
+        );
+    }
+}

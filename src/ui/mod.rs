@@ -144,6 +144,7 @@ impl Plugin for AppPlugin {
 
 /// Opens the window and runs the app until it is closed.
 pub fn run_app(scene: LoadedScene, options: AppOptions) {
+    explain_a_missing_display();
     let title = title::title(&scene.name(), false);
     App::new()
         .add_plugins(DefaultPlugins.set(WindowPlugin {
@@ -161,6 +162,39 @@ pub fn run_app(scene: LoadedScene, options: AppOptions) {
         .add_plugins(SimPlugin)
         .add_plugins(AppPlugin { scene, options })
         .run();
+}
+
+/// Where no window can open (no X display: `DISPLAY` unset, or a display that does not answer),
+/// bevy_winit panics as it builds its event loop. That one panic becomes a line naming the
+/// cause and what runs without a display, with exit code 2 (bad input, as elsewhere); every
+/// other panic goes to the default hook.
+fn explain_a_missing_display() {
+    let default_hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let message = info
+            .payload()
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| info.payload().downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if let Some(why) = message.strip_prefix("Failed to build event loop") {
+            // winit's error, out of the `: Os(OsError { line, file, error: … })` around it.
+            let why = why
+                .rsplit_once("error: ")
+                .and_then(|(_, e)| e.strip_suffix(" })"))
+                .unwrap_or(why.trim_start_matches(": "));
+            let cause = match std::env::var("DISPLAY").unwrap_or_default().as_str() {
+                "" => "DISPLAY is not set".to_string(),
+                d => format!("the X display {d} does not answer ({why})"),
+            };
+            eprintln!(
+                "hooke: no window can open here: {cause}. `hooke run --scene NAME` runs a \
+                 scene without a window, and `xvfb-run hooke` runs the app on a virtual screen."
+            );
+            std::process::exit(2);
+        }
+        default_hook(info);
+    }));
 }
 
 /// Where "Save scene" writes: `saved/<scene>-<n>.ron` in the working directory.
