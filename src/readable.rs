@@ -52,8 +52,9 @@ pub fn count(n: usize) -> String {
 
 /// A time step in seconds as people write it: a number (`0.0001`, `1e-4`) or a fraction `p/q`
 /// (`1/60`, a frame's step), which must come out finite, above 0 and at most
-/// [`crate::sim::MAX_DT`]. What the command line's `--dt` and the panel's dt field read. The error completes a sentence that starts with the
-/// field's name ("--dt must be finite and > 0, got -1").
+/// [`crate::sim::MAX_DT`] ([`crate::sim::dt_problem`]). What the command line's `--dt` and the
+/// panel's dt field read. The error completes a sentence that starts with the field's name
+/// ("--dt must be finite and > 0, got -1").
 ///
 /// ```
 /// assert_eq!(hooke::readable::seconds("1/60"), Ok(1.0 / 60.0));
@@ -62,11 +63,8 @@ pub fn count(n: usize) -> String {
 /// ```
 pub fn seconds(text: &str) -> Result<f64, String> {
     let value = fraction(text)?;
-    if !value.is_finite() || value <= 0.0 {
-        return Err(format!("must be finite and > 0, got {}", text.trim()));
-    }
-    if value > crate::sim::MAX_DT {
-        return Err(format!("must be at most 1e9 s, got {}", text.trim()));
+    if let Some(rule) = crate::sim::dt_problem(value) {
+        return Err(format!("{rule}, got {}", text.trim()));
     }
     Ok(value)
 }

@@ -100,11 +100,8 @@ pub struct Overrides {
 impl Overrides {
     /// Checks the values a user typed; names the flag at fault.
     pub fn validate(&self) -> Result<(), String> {
-        if let Some(dt) = self.dt.filter(|d| !(d.is_finite() && *d > 0.0)) {
-            return Err(format!("--dt must be finite and > 0, got {dt}"));
-        }
-        if let Some(dt) = self.dt.filter(|d| *d > sim::MAX_DT) {
-            return Err(format!("--dt must be at most 1e9 s, got {dt}"));
+        if let Some((dt, rule)) = self.dt.and_then(|d| Some((d, sim::dt_problem(d)?))) {
+            return Err(format!("--dt {rule}, got {dt}"));
         }
         if let Some(k) = self.stiffness.filter(|k| !(k.is_finite() && *k >= 0.0)) {
             return Err(format!("--stiffness must be finite and >= 0, got {k}"));

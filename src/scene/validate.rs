@@ -33,10 +33,8 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
             scene.spring_damping
         ));
     }
-    if !(scene.dt.is_finite() && scene.dt > 0.0) {
-        p.push(format!("dt: must be finite and > 0, got {}", scene.dt));
-    } else if scene.dt > crate::sim::MAX_DT {
-        p.push(format!("dt: must be at most 1e9 s, got {}", scene.dt));
+    if let Some(rule) = crate::sim::dt_problem(scene.dt) {
+        p.push(format!("dt: {rule}, got {}", scene.dt));
     }
     if let Some(s) = scene.tear.filter(|s| !(s.is_finite() && *s > 0.0)) {
         p.push(format!("tear: the strain must be finite and > 0, got {s}"));

@@ -36,11 +36,8 @@ pub fn check_params(p: &SimParams) -> Option<InputProblem> {
     const FINITE: &str = "must be finite";
     let bad_positive = |v: f64| !(v.is_finite() && v > 0.0);
     let bad_non_negative = |v: f64| !(v.is_finite() && v >= 0.0);
-    if bad_positive(p.dt) {
-        return Some(problem("SimParams.dt", p.dt, POSITIVE));
-    }
-    if p.dt > super::params::MAX_DT {
-        return Some(problem("SimParams.dt", p.dt, "must be at most 1e9 s"));
+    if let Some(rule) = super::params::dt_problem(p.dt) {
+        return Some(problem("SimParams.dt", p.dt, rule));
     }
     for (field, v) in [
         ("SimParams.gravity.x", p.gravity.x),

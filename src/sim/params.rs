@@ -248,6 +248,19 @@ pub struct Tearing {
 /// scene with rigid bodies panicked at it.
 pub const MAX_DT: f64 = 1e9;
 
+/// What is wrong with a time step, as the end of a sentence that starts with its field's name
+/// ("dt must be at most 1e9 s"); `None` for a step above 0 and at most [`MAX_DT`]. The one rule
+/// for the scene file, `--dt`, the panel's field, the tick's input check and `advance`.
+pub fn dt_problem(dt: f64) -> Option<&'static str> {
+    if !(dt.is_finite() && dt > 0.0) {
+        Some("must be finite and > 0")
+    } else if dt > MAX_DT {
+        Some("must be at most 1e9 s")
+    } else {
+        None
+    }
+}
+
 /// What is wrong with an input.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct InputProblem {

@@ -774,7 +774,7 @@ pub fn advance(world: &mut World, steps: u64) -> u64 {
     // A dt that avian's clock cannot hold (NaN, not above 0, over `MAX_DT`) is the input
     // check's to name before the clock takes it: the tick would check it only after.
     #[cfg(feature = "avian")]
-    if coupled && !(dt > 0.0 && dt <= super::params::MAX_DT) {
+    if coupled && super::params::dt_problem(dt).is_some() {
         check_tick(world);
         return 0;
     }
