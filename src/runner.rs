@@ -344,7 +344,16 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
             if !(t.is_finite() && t >= 0.0) {
                 return Err(format!("--time must be finite and >= 0, got {t}"));
             }
-            (t / params.dt).round() as u64
+            let n = (t / params.dt).round();
+            // `as u64` saturates: a --time past what a run counts would run forever unsaid.
+            if n >= u64::MAX as f64 {
+                return Err(format!(
+                    "--time {t} s at dt {} s is {n:.3e} steps, more than a run counts ({:.3e})",
+                    params.dt,
+                    u64::MAX as f64
+                ));
+            }
+            n as u64
         }
     };
     // Check and pack the scene without stepping, so that the start energy is that of the loaded

@@ -273,7 +273,7 @@ fn large_step_methods_report_their_iterations() {
 
 #[test]
 fn bad_flags() {
-    let cases: [(&[&str], &str); 15] = [
+    let cases: [(&[&str], &str); 16] = [
         (&["--dt", "-1"], "--dt must be finite and > 0, got -1"),
         (&["--dt", "1e19"], "--dt must be at most 1e9 s, got 1e19"),
         (
@@ -301,6 +301,8 @@ fn bad_flags() {
         ),
         (&["--damping", "inf"], "--damping must be finite and >= 0"),
         (&["--time", "-1"], "--time must be finite and >= 0, got -1"),
+        // 1e34 steps at the scene's dt: refused, not run as u64::MAX steps.
+        (&["--time", "1e30"], "more than a run counts"),
         (&["--integrator", "leapfrog"], "leapfrog"),
         (&["--steps", "ten"], "ten"),
         (&["--steps", "5", "--time", "1"], "cannot be used with"),
