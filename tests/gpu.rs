@@ -531,8 +531,9 @@ fn an_untouched_tick_on_the_card_reads_only_its_summary() {
     assert!(app.world().resource::<sim::gpu::CardStep>().behind());
     assert_eq!(solver(&app).x(), &held[..], "the state came back unasked");
     let g = app.world().resource::<SimParams>().gravity;
-    let shown = solver(&app).energy_now(g).total();
-    let expected = solver(&cpu).energy_now(g).total();
+    let serial = hooke::solver::Threads::serial();
+    let shown = solver(&app).energy_now(g, &serial).total();
+    let expected = solver(&cpu).energy_now(g, &serial).total();
     println!("energy: card {shown}, CPU {expected}");
     assert!((shown - expected).abs() < 1e-9 * expected.abs());
     sim::gpu::catch_up(app.world_mut()).unwrap();

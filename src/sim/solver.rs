@@ -60,10 +60,15 @@ impl DerefMut for Solver {
 
 impl Solver {
     /// The state's energy now: the card's own sum while the steps run there and the packed
-    /// state lags the card's (its state read on demand), else the packed state's.
-    pub fn energy_now(&self, gravity: bevy::math::DVec2) -> crate::solver::Energy {
+    /// state lags the card's (its state read on demand), else the packed state's, summed on
+    /// `threads` ([`State::energy_on`]).
+    pub fn energy_now(
+        &self,
+        gravity: bevy::math::DVec2,
+        threads: &crate::solver::Threads,
+    ) -> crate::solver::Energy {
         self.energy_on_card
-            .unwrap_or_else(|| self.state.energy(gravity))
+            .unwrap_or_else(|| self.state.energy_on(gravity, threads))
     }
 
     /// Particle entity of each dense index, in creation order.

@@ -47,6 +47,7 @@ pub struct AppState<'w, 's> {
     obstacles: Query<'w, 's, &'static crate::sim::ObstaclePose, With<crate::sim::Obstacle>>,
     card: Res<'w, crate::sim::gpu::CardStep>,
     picture: Res<'w, super::card_draw::CardPicture>,
+    threads: Res<'w, crate::sim::SolverThreads>,
 }
 
 /// Scenes up to this many particles list their positions in the status report.
@@ -117,7 +118,7 @@ pub fn drive(
             // Whether the solver's state (and `positions`) lag the card's: with the state read
             // on demand, while nothing in the window wants it.
             "state_lags_card": app.card.behind(),
-            "energy": solver.energy_now(params.gravity).total(),
+            "energy": solver.energy_now(params.gravity, &app.threads).total(),
             // Whether the meshes are drawn from the card's buffers, and frames drawn so.
             "drawn_on_card": app.picture.active(),
             "frames_drawn_on_card": app.picture.frames_drawn(),

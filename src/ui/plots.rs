@@ -1,7 +1,9 @@
 //! The panel's plots: the energy over the last [`WINDOW`] seconds of simulated time, by kind,
 //! and h·ω_max against the integrator's stability limit.
 
-use crate::sim::{Energy, SimClock, SimParams, Solver, Stability, StabilityEstimate};
+use crate::sim::{
+    Energy, SimClock, SimParams, Solver, SolverThreads, Stability, StabilityEstimate,
+};
 use bevy::prelude::*;
 use bevy_egui::egui;
 use egui_plot::{HLine, Line, Plot};
@@ -37,12 +39,13 @@ pub fn sample(
     solver: Res<Solver>,
     params: Res<SimParams>,
     stability: Res<Stability>,
+    threads: Res<SolverThreads>,
     mut timeline: ResMut<Timeline>,
 ) {
     // While the card steps and its state is read on demand, the card's sum comes each tick
     // without the solver changing.
     if solver.is_changed() || params.is_changed() || solver.energy_on_card.is_some() {
-        timeline.energy = solver.energy_now(params.gravity);
+        timeline.energy = solver.energy_now(params.gravity, &threads);
     }
     // An empty solver is one not packed yet (a scene load, an undo): its energy is not the
     // scene's.

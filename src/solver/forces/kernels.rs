@@ -39,6 +39,69 @@ pub fn for_each_spring_force(x: &[DVec2], springs: &[PackedSpring], add: impl Fn
     scatter_pairs(springs, |s| spring_force(s, x), add);
 }
 
+/// Σ ½k(|x_a − x_b| − L)² over `springs`: eight running sums, spring i of each eight into sum
+/// i, so that no addition waits on the one before; four springs at a time where the CPU has
+/// AVX ([`super::wide::spring_energy`], the same operations in the same order, so the same
+/// bits).
+pub fn spring_energy(x: &[DVec2], springs: &[PackedSpring]) -> f64 {
+    #[cfg(target_arch = "x86_64")]
+    if super::wide::available() {
+        // SAFETY: the CPU has AVX, checked just above.
+        return unsafe { super::wide::spring_energy(x, springs) };
+    }
+    spring_energy_portable(x, springs)
+}
+
+/// [`spring_energy`] one spring at a time.
+pub(crate) fn spring_energy_portable(x: &[DVec2], springs: &[PackedSpring]) -> f64 {
+    let mut sums = [0.0; 8];
+    let mut octs = springs.chunks_exact(8);
+    for oct in &mut octs {
+        for (sum, s) in sums.iter_mut().zip(oct) {
+            *sum += one_spring_energy(s, x);
+        }
+    }
+    energy_total(sums, octs.remainder(), x)
+}
+
+/// (Σ ½m|v|², −Σ m g·x) over the particles of `x` (and as many of `v` and `mass`), in four
+/// running sums each, particle i of each four into sum i.
+pub fn particle_energy(x: &[DVec2], v: &[DVec2], mass: &[f64], gravity: DVec2) -> (f64, f64) {
+    let (mut kinetic, mut potential) = ([0.0; 4], [0.0; 4]);
+    let n = x.len().min(v.len()).min(mass.len());
+    let whole = n - n % 4;
+    for i in (0..whole).step_by(4) {
+        for j in 0..4 {
+            let (x, v, m) = (x[i + j], v[i + j], mass[i + j]);
+            kinetic[j] += 0.5 * m * v.length_squared();
+            potential[j] -= m * gravity.dot(x);
+        }
+    }
+    let total = |s: [f64; 4]| (s[0] + s[1]) + (s[2] + s[3]);
+    let (mut kinetic, mut potential) = (total(kinetic), total(potential));
+    for i in whole..n {
+        kinetic += 0.5 * mass[i] * v[i].length_squared();
+        potential -= mass[i] * gravity.dot(x[i]);
+    }
+    (kinetic, potential)
+}
+
+/// ½k(|x_a − x_b| − L)².
+#[inline(always)]
+pub(crate) fn one_spring_energy(s: &PackedSpring, x: &[DVec2]) -> f64 {
+    let stretch = (x[s.a as usize] - x[s.b as usize]).length() - s.rest;
+    0.5 * s.k * stretch * stretch
+}
+
+/// [`spring_energy`]'s eight running sums and the springs past the last eight, added in one
+/// order for both of its forms.
+#[inline(always)]
+pub(crate) fn energy_total(sums: [f64; 8], rest: &[PackedSpring], x: &[DVec2]) -> f64 {
+    let s: [f64; 4] = std::array::from_fn(|i| sums[i] + sums[i + 4]);
+    let tail: f64 = rest.iter().map(|s| one_spring_energy(s, x)).sum();
+    ((s[0] + s[1]) + (s[2] + s[3])) + tail
+}
+
 /// v += dt f / m. Pinned particles have inverse mass 0 and stay at rest.
 pub fn kick(v: &mut [DVec2], f: &[DVec2], inv_mass: &[f64], dt: f64) {
     for ((v, f), &w) in v.iter_mut().zip(f).zip(inv_mass) {

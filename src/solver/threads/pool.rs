@@ -52,15 +52,20 @@ impl Default for Threads {
     /// All cores.
     fn default() -> Self {
         let n = std::thread::available_parallelism().map_or(1, |n| n.get());
-        Self::new(n).unwrap_or_else(|_| Threads {
-            threads: 1,
-            pool: None,
-            holder: Arc::default(),
-        })
+        Self::new(n).unwrap_or_else(|_| Threads::serial())
     }
 }
 
 impl Threads {
+    /// One thread: everything on the calling thread.
+    pub fn serial() -> Self {
+        Threads {
+            threads: 1,
+            pool: None,
+            holder: Arc::default(),
+        }
+    }
+
     /// A pool of `threads` solver threads (1: no pool, everything on the calling thread).
     pub fn new(threads: usize) -> Result<Self, String> {
         if !(1..=MAX_THREADS).contains(&threads) {
@@ -187,6 +192,24 @@ impl Threads {
             }
             None => pool.install(|| items.into_par_iter().map(&f).collect()),
         })
+    }
+
+    /// `f` of each block of `block` items of `data`, in order: on the pool's threads when a
+    /// scene of `springs` springs is worth sharing, else on this one. The blocks are the same
+    /// whatever the thread count, so a sum of the results taken in order has the same bits on
+    /// one thread or many.
+    pub(crate) fn blocks<T: Sync, R: Send>(
+        &self,
+        springs: usize,
+        data: &[T],
+        block: usize,
+        f: impl Fn(&[T]) -> R + Sync,
+    ) -> Vec<R> {
+        let blocks: Vec<&[T]> = data.chunks(block.max(1)).collect();
+        match self.pool_for(springs) {
+            Some(pool) if blocks.len() > 1 => self.map_items(pool, blocks, f),
+            _ => blocks.into_iter().map(f).collect(),
+        }
     }
 
     /// Whether this thread holds this pool's crew (inside [`Self::run`]), for the tests that
