@@ -338,6 +338,10 @@ fn fail(message: impl std::fmt::Display) -> ExitCode {
 }
 
 fn run(args: RunArgs) -> ExitCode {
+    // A CSV the run could not write would lose the run at its end: checked before it starts.
+    if let Some(Err(e)) = args.out.as_deref().map(|p| writable_file("--out", p)) {
+        return fail(e);
+    }
     let loaded = match presets::resolve(&args.scene) {
         Ok(l) => l,
         Err(e) => return fail(e),
@@ -779,6 +783,29 @@ fn write_files(out: &std::path::Path, files: &[(&str, &str)]) -> Result<(), Stri
         .map_err(|e| format!("cannot write the report into {}: {e}", out.display()))
 }
 
+/// Whether a file could be written at `path`, named by its `flag`: its folder exists, and the
+/// path is not a folder itself. Checked before the work whose result it would hold.
+fn writable_file(flag: &str, path: &std::path::Path) -> Result<(), String> {
+    let folder = path
+        .parent()
+        .filter(|f| !f.as_os_str().is_empty())
+        .unwrap_or(std::path::Path::new("."));
+    if !folder.is_dir() {
+        return Err(format!(
+            "{flag}: cannot write {}: there is no folder {}",
+            path.display(),
+            folder.display()
+        ));
+    }
+    if path.is_dir() {
+        return Err(format!(
+            "{flag}: cannot write {}: it is a folder; name a file in it",
+            path.display()
+        ));
+    }
+    Ok(())
+}
+
 /// The scripted run's flags, checked before a window opens: a screenshot or report the app
 /// could not write, or a time it would never reach, is bad input named by its flag, not an
 /// error line from the renderer (or a run that never quits) after the window is up.
@@ -788,17 +815,8 @@ fn check_scripted_run(args: &AppArgs) -> Result<(), String> {
         ("--screenshot", &args.screenshot),
         ("--report", &args.report),
     ] {
-        let Some(path) = path else { continue };
-        let folder = path
-            .parent()
-            .filter(|f| !f.as_os_str().is_empty())
-            .unwrap_or(std::path::Path::new("."));
-        if !folder.is_dir() {
-            return Err(format!(
-                "{flag}: cannot write {}: there is no folder {}",
-                path.display(),
-                folder.display()
-            ));
+        if let Some(path) = path {
+            writable_file(flag, path)?;
         }
     }
     if let Some(path) = &args.screenshot

@@ -314,6 +314,34 @@ fn bad_flags() {
     }
 }
 
+/// `--out` names a file the run could not write (no such folder, or a folder): refused before
+/// the run, not after it, when the run's result would be lost. The run asked for here is
+/// 1e9 steps of cloth32 (hours), so a check after it would not end within the test.
+#[test]
+fn an_unwritable_out_is_refused_before_the_run() {
+    let folder = temp("out-folder");
+    std::fs::create_dir_all(&folder).unwrap();
+    let missing = temp("no-such-folder").join("state.csv");
+    for (out, needle) in [
+        (&missing, "there is no folder"),
+        (&folder, "it is a folder"),
+    ] {
+        let start = std::time::Instant::now();
+        let o = hooke(&[
+            "run",
+            "--scene",
+            "cloth32",
+            "--steps",
+            "1000000000",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_bad_input(&o, needle);
+        assert!(stderr(&o).contains("--out: cannot write"), "{}", stderr(&o));
+        assert!(start.elapsed().as_secs() < 60, "it ran first");
+    }
+}
+
 /// `hooke bench perf` checks its flags before measuring anything.
 /// `--separate-passes` runs the particle passes as systems of their own: the same state bit for
 /// bit (the JSON's floats round-trip).
