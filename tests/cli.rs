@@ -342,6 +342,39 @@ fn an_unwritable_out_is_refused_before_the_run() {
     }
 }
 
+/// Outside the repository (an installed `hooke`) the report scenes are built in: a run of one
+/// by its path, and the stability report over the hard cases, from an empty folder.
+#[test]
+fn report_scenes_run_from_any_folder() {
+    let empty = temp("elsewhere");
+    std::fs::create_dir_all(&empty).unwrap();
+    let elsewhere = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_hooke"))
+            .args(args)
+            .current_dir(&empty)
+            .output()
+            .expect("the hooke binary runs")
+    };
+    let o = elsewhere(&[
+        "run",
+        "--scene",
+        "assets/scenes/hard/impact.ron",
+        "--steps",
+        "10",
+        "--json",
+    ]);
+    assert_eq!(json(&o)["steps_taken"], 10, "{}", stderr(&o));
+    let o = elsewhere(&["bench", "stability", "--steps", "1", "--out", "report"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report = std::fs::read_to_string(empty.join("report/stability.md")).unwrap();
+    for name in ["cloth_light", "impact", "mass_ratio"] {
+        assert!(report.contains(&format!("| {name} |")), "{name}: {report}");
+    }
+    // A folder named that does not exist, and is none of the built-in ones, is still refused.
+    let o = elsewhere(&["bench", "stability", "--scenes", "nowhere", "--steps", "1"]);
+    assert_bad_input(&o, "no scene files in nowhere");
+}
+
 /// `hooke bench perf` checks its flags before measuring anything.
 /// `--separate-passes` runs the particle passes as systems of their own: the same state bit for
 /// bit (the JSON's floats round-trip).

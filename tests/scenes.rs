@@ -83,6 +83,37 @@ fn every_shipped_scene_is_built_in() {
     }
 }
 
+/// Every scene file the reports run (`assets/scenes/bench/`, `assets/scenes/hard/`) is built in
+/// under its path, with the file's text, and nothing else is: `hooke bench stability` once found
+/// no scenes outside the repository, and `hooke bench large-steps` could not read its cloth.
+#[test]
+fn every_report_scene_is_built_in() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = vec![];
+    for dir in ["assets/scenes/bench", "assets/scenes/hard"] {
+        for path in presets::scene_files(&root.join(dir)) {
+            let shipped = path
+                .strip_prefix(root)
+                .unwrap()
+                .to_string_lossy()
+                .into_owned();
+            let text = std::fs::read_to_string(&path).unwrap();
+            let built_in = presets::REPORT_SCENES.iter().find(|(p, _)| *p == shipped);
+            assert!(
+                built_in.is_some_and(|(_, t)| *t == text),
+                "{shipped} is shipped but not built in"
+            );
+            files.push(shipped);
+        }
+    }
+    for (p, _) in presets::REPORT_SCENES {
+        assert!(
+            files.iter().any(|f| f == p),
+            "{p} is built in but not shipped"
+        );
+    }
+}
+
 /// The app opens on the unit square: a built-in scene stays in it while it plays out (the
 /// soft box, thrown at 1 m/s, once slid on over the frictionless ground to x = 1.3-1.6 and left
 /// the user an empty canvas). 6 s simulated: the thrown box has then slid 99 % of its way.

@@ -71,15 +71,11 @@ fn theory(scene: &Scene, integrator: Integrator) -> Result<f64, String> {
     Ok(stability::estimate(world.resource::<Solver>(), &params).stable_dt)
 }
 
-/// The hard scenes in assets/scenes/hard/, by name.
+/// The hard scenes in `dir` (assets/scenes/hard/: those files, else the built-in copies), by
+/// name.
 pub fn hard_scenes(dir: &Path) -> Result<Vec<(String, Scene)>, String> {
-    presets::scene_files(dir)
-        .into_iter()
-        .map(|p| {
-            let l = LoadedScene::read(&p).map_err(|e| e.to_string())?;
-            Ok((l.name(), l.scene))
-        })
-        .collect()
+    let scenes = presets::scenes_in(dir).map_err(|e| e.to_string())?;
+    Ok(scenes.into_iter().map(|l| (l.name(), l.scene)).collect())
 }
 
 /// Bisects the largest stable dt of every scene in `scenes` under every integrator; `progress` is told what runs.

@@ -28,6 +28,65 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("crates", include_str!("../../assets/scenes/crates.ron")),
 ];
 
+/// The scene files the reports run (`hooke bench`'s scenes and hard cases), by their paths
+/// from the repository's root: built in, so that an installed `hooke bench stability` or
+/// `hooke run --scene assets/scenes/bench/cloth256.ron` works in any folder. A file at that path
+/// is read instead ([`resolve`], [`scenes_in`]), so that an edited copy is what runs.
+pub const REPORT_SCENES: &[(&str, &str)] = &[
+    (
+        "assets/scenes/bench/cloth256.ron",
+        include_str!("../../assets/scenes/bench/cloth256.ron"),
+    ),
+    (
+        "assets/scenes/bench/cloth256_contact.ron",
+        include_str!("../../assets/scenes/bench/cloth256_contact.ron"),
+    ),
+    (
+        "assets/scenes/bench/cloth256_free.ron",
+        include_str!("../../assets/scenes/bench/cloth256_free.ron"),
+    ),
+    (
+        "assets/scenes/bench/cloth64.ron",
+        include_str!("../../assets/scenes/bench/cloth64.ron"),
+    ),
+    (
+        "assets/scenes/bench/cloth64_implicit.ron",
+        include_str!("../../assets/scenes/bench/cloth64_implicit.ron"),
+    ),
+    (
+        "assets/scenes/bench/one_particle.ron",
+        include_str!("../../assets/scenes/bench/one_particle.ron"),
+    ),
+    (
+        "assets/scenes/hard/cloth_light.ron",
+        include_str!("../../assets/scenes/hard/cloth_light.ron"),
+    ),
+    (
+        "assets/scenes/hard/coincident.ron",
+        include_str!("../../assets/scenes/hard/coincident.ron"),
+    ),
+    (
+        "assets/scenes/hard/collinear.ron",
+        include_str!("../../assets/scenes/hard/collinear.ron"),
+    ),
+    (
+        "assets/scenes/hard/impact.ron",
+        include_str!("../../assets/scenes/hard/impact.ron"),
+    ),
+    (
+        "assets/scenes/hard/large_dt.ron",
+        include_str!("../../assets/scenes/hard/large_dt.ron"),
+    ),
+    (
+        "assets/scenes/hard/long_chain.ron",
+        include_str!("../../assets/scenes/hard/long_chain.ron"),
+    ),
+    (
+        "assets/scenes/hard/mass_ratio.ron",
+        include_str!("../../assets/scenes/hard/mass_ratio.ron"),
+    ),
+];
+
 /// The scene the app opens with: the assignment's empty canvas.
 pub const DEFAULT_SCENE: &str = "empty";
 
@@ -45,6 +104,9 @@ pub fn resolve(name_or_path: &str) -> Result<LoadedScene, SceneError> {
         if let Some((name, text)) = BUILTIN.iter().find(|(n, _)| *n == name_or_path) {
             return LoadedScene::parse(text, &PathBuf::from(format!("assets/scenes/{name}.ron")));
         }
+        if let Some((shipped, text)) = REPORT_SCENES.iter().find(|(p, _)| Path::new(p) == path) {
+            return LoadedScene::parse(text, Path::new(shipped));
+        }
         let looks_like_a_path =
             name_or_path.contains(['/', '\\']) || name_or_path.ends_with(".ron");
         if !looks_like_a_path {
@@ -55,6 +117,23 @@ pub fn resolve(name_or_path: &str) -> Result<LoadedScene, SceneError> {
         }
     }
     LoadedScene::read(path)
+}
+
+/// The scenes in a folder, sorted by path: its files, or, where no such folder exists, the
+/// [`REPORT_SCENES`] built in under that path (`hooke bench stability`'s hard cases in any
+/// folder).
+pub fn scenes_in(dir: &Path) -> Result<Vec<LoadedScene>, SceneError> {
+    if dir.is_dir() {
+        return scene_files(dir)
+            .iter()
+            .map(|p| LoadedScene::read(p))
+            .collect();
+    }
+    REPORT_SCENES
+        .iter()
+        .filter(|(p, _)| Path::new(p).starts_with(dir))
+        .map(|(p, text)| LoadedScene::parse(text, Path::new(p)))
+        .collect()
 }
 
 /// Scene files found in a directory (sorted), for the scene picker.
