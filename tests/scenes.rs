@@ -83,6 +83,43 @@ fn every_shipped_scene_is_built_in() {
     }
 }
 
+/// A scene as Windows editors save it, with a byte-order mark and CRLF line ends, loads as
+/// the file without them does (the mark was "1:1: Expected opening `(`"); one saved as UTF-16
+/// is refused with what to do about it.
+#[test]
+fn a_scene_saved_on_windows_loads() {
+    let dir = std::env::temp_dir().join(format!("hooke-scenes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = presets::BUILTIN
+        .iter()
+        .find(|(n, _)| *n == "rope")
+        .unwrap()
+        .1;
+    let windows = format!("\u{feff}{}", text.replace('\n', "\r\n"));
+    let path = dir.join("rope-notepad.ron");
+    std::fs::write(&path, windows).unwrap();
+    let loaded = LoadedScene::read(&path).unwrap_or_else(|e| panic!("{e}"));
+    let plain = LoadedScene::parse(text, Path::new("rope.ron")).unwrap();
+    assert_eq!(
+        format!("{:?}", loaded.scene),
+        format!("{:?}", plain.scene),
+        "the same scene"
+    );
+
+    let utf16: Vec<u8> = [0xfeffu16]
+        .into_iter()
+        .chain(text.encode_utf16())
+        .flat_map(u16::to_le_bytes)
+        .collect();
+    let path = dir.join("rope-utf16.ron");
+    std::fs::write(&path, utf16).unwrap();
+    let e = LoadedScene::read(&path).expect_err("refused").to_string();
+    assert!(
+        e.contains("it is not UTF-8 text") && e.contains("save it as UTF-8"),
+        "{e}"
+    );
+}
+
 /// Every scene file the reports run (`assets/scenes/bench/`, `assets/scenes/hard/`) is built in
 /// under its path, with the file's text, and nothing else is: `hooke bench stability` once found
 /// no scenes outside the repository, and `hooke bench large-steps` could not read its cloth.

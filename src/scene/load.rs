@@ -50,6 +50,13 @@ pub enum SceneError {
 impl fmt::Display for SceneError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            SceneError::Io { path, error } if error.kind() == std::io::ErrorKind::InvalidData => {
+                write!(
+                    f,
+                    "cannot read scene {}: it is not UTF-8 text ({error}); save it as UTF-8",
+                    path.display()
+                )
+            }
             SceneError::Io { path, error } => {
                 write!(f, "cannot read scene {}: {error}", path.display())
             }
@@ -109,8 +116,10 @@ impl LoadedScene {
         self.scene.expand()
     }
 
-    /// Parses and validates RON text; `path` only names the source in errors.
+    /// Parses and validates RON text; `path` only names the source in errors. A byte-order mark
+    /// at the start (as some Windows editors save UTF-8) is no part of the scene and is skipped.
     pub fn parse(text: &str, path: &Path) -> Result<Self, SceneError> {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let scene: Scene = super::ron_options()
             .from_str(text)
             .map_err(|e| SceneError::Parse {
