@@ -64,10 +64,31 @@ pub fn redo(world: &mut World) {
     world.insert_resource(Notice(Some((text, false))));
 }
 
-/// Reloads the current scene as it was loaded (an edit: undo takes it back).
+/// Reloads the current scene (an edit: undo takes it back). A scene from a file is read from
+/// the file again, so that a scene being written in an editor shows each change at R; a file
+/// that no longer loads leaves what is on screen as it is and says why. A scene with no file
+/// (a built-in one run outside the repository, one made in code) resets to what was loaded.
 pub fn reset(world: &mut World) {
-    if let Some(scene) = world.get_resource::<CurrentScene>().map(|s| s.0.clone()) {
-        replace_scene(world, "reset", &scene);
+    let Some(current) = world.get_resource::<CurrentScene>().map(|s| s.0.clone()) else {
+        return;
+    };
+    let Some(path) = current.path.clone().filter(|p| p.is_file()) else {
+        replace_scene(world, "reset", &current);
+        return;
+    };
+    match LoadedScene::read(&path) {
+        Ok(fresh) => {
+            let changed = fresh.scene != current.scene;
+            replace_scene(world, "reset", &fresh);
+            if changed {
+                let text = format!("reloaded {}: the file changed", path.display());
+                world.insert_resource(Notice(Some((text, false))));
+            }
+        }
+        Err(e) => {
+            let text = format!("{e}\nNothing was reset: mend the file and press R again.");
+            world.insert_resource(Notice(Some((text, true))));
+        }
     }
 }
 
@@ -145,5 +166,49 @@ mod tests {
         assert!(!unsaved(world), "back at the first load");
         reset(world);
         assert!(!unsaved(world), "a reset over nothing unsaved");
+    }
+
+    /// R reads a scene's file again: a change made in an editor shows, undo takes it back, and a
+    /// file broken since leaves the world as it was, with the error on the panel.
+    #[test]
+    fn reset_reads_the_file_again() {
+        let dir = std::env::temp_dir().join(format!("hooke-reset-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("two.ron");
+        let scene = |x: f64| {
+            format!(
+                "(ground: None, particles: [(pos: (0.5, 0.5), pinned: true), (pos: ({x}, 0.5))], \
+                 springs: [(a: 0, b: 1, stiffness: 100.0, rest: 0.1)])"
+            )
+        };
+        std::fs::write(&path, scene(0.6)).unwrap();
+        let mut app = crate::headless_app();
+        app.init_resource::<History>();
+        let world = app.world_mut();
+        open(world, &LoadedScene::read(&path).unwrap());
+        let second_x = |w: &mut World| {
+            let mut q = w.query::<(&crate::sim::Position, Has<crate::sim::Pinned>)>();
+            let free: Vec<f64> = q.iter(w).filter(|(_, p)| !p).map(|(x, _)| x.0.x).collect();
+            assert_eq!(free.len(), 1);
+            free[0]
+        };
+        assert_eq!(second_x(world), 0.6);
+
+        std::fs::write(&path, scene(0.7)).unwrap();
+        reset(world);
+        assert_eq!(second_x(world), 0.7, "the file's change shows");
+        let notice = world.resource::<Notice>().0.clone().unwrap();
+        assert!(
+            notice.0.contains("the file changed") && !notice.1,
+            "{notice:?}"
+        );
+        history::undo(world);
+        assert_eq!(second_x(world), 0.6, "undo takes the reload back");
+
+        std::fs::write(&path, "(particles: [(pos: (0.5, oops))])").unwrap();
+        reset(world);
+        assert_eq!(second_x(world), 0.6, "a broken file changes nothing");
+        let (text, is_error) = world.resource::<Notice>().0.clone().unwrap();
+        assert!(is_error && text.contains("two.ron:1:") && text.contains("Nothing was reset"));
     }
 }
