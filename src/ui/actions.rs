@@ -4,6 +4,7 @@
 use super::history::{self, History};
 use crate::scene::{CurrentScene, LoadedScene, load_into_world, presets, snapshot, to_ron};
 use bevy::prelude::*;
+use bevy::window::FileDragAndDrop;
 use std::path::Path;
 
 /// A message for the panel after a keyboard or button action: (text, is an error).
@@ -97,6 +98,44 @@ pub fn open(world: &mut World, scene: &LoadedScene) {
     replace_scene(world, "load", scene);
 }
 
+/// Files dropped on the window: each opens as [`open_file`] opens it.
+pub fn open_dropped_files(mut drops: MessageReader<FileDragAndDrop>, mut commands: Commands) {
+    for drop in drops.read() {
+        if let FileDragAndDrop::DroppedFile { path_buf, .. } = drop {
+            let path = path_buf.clone();
+            commands.queue(move |w: &mut World| open_file(w, &path));
+        }
+    }
+}
+
+/// Opens the scene file at `path` as the picker opens one (an edit: undo takes it back). A file
+/// that is no scene file, or one that does not load, leaves what is on screen as it is, and the
+/// panel says why.
+pub fn open_file(world: &mut World, path: &Path) {
+    let refused = if !path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ron"))
+    {
+        Some(format!(
+            "{} is not a scene: hooke opens scene files (.ron)",
+            path.display()
+        ))
+    } else {
+        match LoadedScene::read(path) {
+            Ok(loaded) => {
+                open(world, &loaded);
+                None
+            }
+            Err(e) => Some(e.to_string()),
+        }
+    };
+    let notice = match refused {
+        Some(why) => (format!("{why}\nThe scene on screen is unchanged."), true),
+        None => (format!("opened {}", path.display()), false),
+    };
+    world.insert_resource(Notice(Some(notice)));
+}
+
 /// Loads `scene` as an edit labelled `label`. What is on screen is then a file's, and nothing
 /// is unsaved, unless something was before: those edits are only in the undo history now,
 /// and quitting still asks first.
@@ -166,6 +205,57 @@ mod tests {
         assert!(!unsaved(world), "back at the first load");
         reset(world);
         assert!(!unsaved(world), "a reset over nothing unsaved");
+    }
+
+    /// A scene file dropped on the window opens (undo takes it back); a file of another kind, or
+    /// a broken scene, changes nothing and the panel says why.
+    #[test]
+    fn a_dropped_scene_file_opens() {
+        let dir = std::env::temp_dir().join(format!("hooke-drop-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let good = dir.join("three.ron");
+        std::fs::write(
+            &good,
+            "(particles: [(pos: (0.2, 0.5)), (pos: (0.4, 0.5)), (pos: (0.6, 0.5))])",
+        )
+        .unwrap();
+        let picture = dir.join("cloth.png");
+        std::fs::write(&picture, [0x89, b'P', b'N', b'G']).unwrap();
+        let broken = dir.join("broken.ron");
+        std::fs::write(&broken, "(particles: [(pos: (0.5, 0.5)),").unwrap();
+
+        let mut app = crate::headless_app();
+        app.init_resource::<History>()
+            .add_message::<FileDragAndDrop>()
+            .add_systems(Update, open_dropped_files);
+        open(app.world_mut(), &presets::resolve("rope").unwrap());
+        let particles = |app: &mut App| {
+            let w = app.world_mut();
+            w.query::<&crate::sim::Particle>().iter(w).count()
+        };
+        let rope = particles(&mut app);
+        let drop = |app: &mut App, path: &Path| {
+            app.world_mut().write_message(FileDragAndDrop::DroppedFile {
+                window: Entity::PLACEHOLDER,
+                path_buf: path.to_owned(),
+            });
+            app.update();
+            app.world().resource::<Notice>().0.clone().unwrap()
+        };
+        for (path, needle) in [
+            (&picture, "is not a scene: hooke opens scene files (.ron)"),
+            (&broken, "broken.ron:1:"),
+        ] {
+            let (text, is_error) = drop(&mut app, path);
+            assert!(is_error && text.contains(needle), "{text}");
+            assert!(text.ends_with("The scene on screen is unchanged."));
+            assert_eq!(particles(&mut app), rope);
+        }
+        let (text, is_error) = drop(&mut app, &good);
+        assert!(!is_error && text.contains("opened"), "{text}");
+        assert_eq!(particles(&mut app), 3);
+        history::undo(app.world_mut());
+        assert_eq!(particles(&mut app), rope, "undo takes the drop back");
     }
 
     /// R reads a scene's file again: a change made in an editor shows, undo takes it back, and a

@@ -124,6 +124,7 @@ impl Plugin for AppPlugin {
                     stats::estimate_stability,
                     plots::sample.after(stats::estimate_stability),
                     automation::drive,
+                    actions::open_dropped_files.run_if(quit::no_prompt),
                     quit::close_requested,
                     title::window_title,
                     pace::pace_frames,
