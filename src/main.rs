@@ -399,13 +399,15 @@ fn run(args: RunArgs) -> ExitCode {
             Err(e) => return fail(e),
         }
     } else {
+        let plural =
+            |n: u64, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
         println!(
-            "{}: {} particles, {} springs, {} x {} steps of {} s = {} s simulated",
+            "{}: {}, {}, {} x {} of {} s = {} s simulated",
             r.scene,
-            r.particles,
-            r.springs,
+            plural(r.particles as u64, "particle", "particles"),
+            plural(r.springs as u64, "spring", "springs"),
             r.integrator,
-            r.steps_taken,
+            plural(r.steps_taken, "step", "steps"),
             // As given (0.016666666666666666 stays whole), unless it is far from any step.
             if (1e-9..1e3).contains(&r.dt) {
                 r.dt.to_string()
@@ -425,8 +427,6 @@ fn run(args: RunArgs) -> ExitCode {
             number(r.energy_start, 6),
             number(r.energy_end, 6)
         );
-        let plural =
-            |n: u64, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
         if r.springs_torn > 0 {
             let torn = plural(r.springs_torn, "spring", "springs");
             println!("{torn} tore");

@@ -375,6 +375,20 @@ fn report_scenes_run_from_any_folder() {
     assert_bad_input(&o, "no scene files in nowhere");
 }
 
+/// The summary counts in words that agree with their numbers: one particle and one step are
+/// not "1 particles" and "1 steps".
+#[test]
+fn the_summary_says_one_particle() {
+    let one = temp("one.ron");
+    std::fs::write(&one, "(particles: [(pos: (0.5, 0.5))])").unwrap();
+    let o = hooke(&["run", "--scene", one.to_str().unwrap(), "--steps", "1"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains(": 1 particle, 0 springs, symplectic-euler x 1 step of 0.0001 s"),
+        "{out}"
+    );
+}
+
 /// `hooke bench perf` checks its flags before measuring anything.
 /// `--separate-passes` runs the particle passes as systems of their own: the same state bit for
 /// bit (the JSON's floats round-trip).
