@@ -223,9 +223,7 @@ impl State {
     /// 0.64 ms, the other thread idle); on both, four springs at a time, 0.28 ms.
     pub fn energy_on(&self, gravity: DVec2, threads: &Threads) -> Energy {
         let springs = self.springs.len();
-        let particles = threads.blocks(springs, &self.x, ENERGY_BLOCK, |x| {
-            // The block's offset in `x`, to read the same particles' v and m.
-            let first = (x.as_ptr() as usize - self.x.as_ptr() as usize) / size_of::<DVec2>();
+        let particles = threads.blocks(springs, &self.x, ENERGY_BLOCK, |first, x| {
             let (v, m) = (&self.v[first..], &self.mass[first..]);
             kernels::particle_energy(x, v, m, gravity)
         });
@@ -233,7 +231,7 @@ impl State {
             .into_iter()
             .fold((0.0, 0.0), |(k, g), (bk, bg)| (k + bk, g + bg));
         let potential_springs = threads
-            .blocks(springs, &self.springs, ENERGY_BLOCK, |s| {
+            .blocks(springs, &self.springs, ENERGY_BLOCK, |_, s| {
                 kernels::spring_energy(&self.x, s)
             })
             .into_iter()

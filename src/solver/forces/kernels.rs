@@ -64,24 +64,13 @@ pub(crate) fn spring_energy_portable(x: &[DVec2], springs: &[PackedSpring]) -> f
     energy_total(sums, octs.remainder(), x)
 }
 
-/// (Σ ½m|v|², −Σ m g·x) over the particles of `x` (and as many of `v` and `mass`), in four
-/// running sums each, particle i of each four into sum i.
+/// (Σ ½m|v|², −Σ m g·x) over the particles of `x` (and as many of `v` and `mass`). One running
+/// sum each: four, as the springs have, measured no faster on the 256² cloth (2026-12-05).
 pub fn particle_energy(x: &[DVec2], v: &[DVec2], mass: &[f64], gravity: DVec2) -> (f64, f64) {
-    let (mut kinetic, mut potential) = ([0.0; 4], [0.0; 4]);
-    let n = x.len().min(v.len()).min(mass.len());
-    let whole = n - n % 4;
-    for i in (0..whole).step_by(4) {
-        for j in 0..4 {
-            let (x, v, m) = (x[i + j], v[i + j], mass[i + j]);
-            kinetic[j] += 0.5 * m * v.length_squared();
-            potential[j] -= m * gravity.dot(x);
-        }
-    }
-    let total = |s: [f64; 4]| (s[0] + s[1]) + (s[2] + s[3]);
-    let (mut kinetic, mut potential) = (total(kinetic), total(potential));
-    for i in whole..n {
-        kinetic += 0.5 * mass[i] * v[i].length_squared();
-        potential -= mass[i] * gravity.dot(x[i]);
+    let (mut kinetic, mut potential) = (0.0, 0.0);
+    for ((x, v), m) in x.iter().zip(v).zip(mass) {
+        kinetic += 0.5 * m * v.length_squared();
+        potential -= m * gravity.dot(*x);
     }
     (kinetic, potential)
 }

@@ -194,18 +194,20 @@ impl Threads {
         })
     }
 
-    /// `f` of each block of `block` items of `data`, in order: on the pool's threads when a
-    /// scene of `springs` springs is worth sharing, else on this one. The blocks are the same
-    /// whatever the thread count, so a sum of the results taken in order has the same bits on
-    /// one thread or many.
+    /// `f(first, block)` of each block of `block` items of `data` (`first`: the block's index in
+    /// `data`), in order: on the pool's threads when a scene of `springs` springs is worth
+    /// sharing, else on this one. The blocks are the same whatever the thread count, so a sum of
+    /// the results taken in order has the same bits on one thread or many.
     pub(crate) fn blocks<T: Sync, R: Send>(
         &self,
         springs: usize,
         data: &[T],
         block: usize,
-        f: impl Fn(&[T]) -> R + Sync,
+        f: impl Fn(usize, &[T]) -> R + Sync,
     ) -> Vec<R> {
-        let blocks: Vec<&[T]> = data.chunks(block.max(1)).collect();
+        let block = block.max(1);
+        let blocks: Vec<(usize, &[T])> = data.chunks(block).enumerate().collect();
+        let f = |(i, b): (usize, &[T])| f(i * block, b);
         match self.pool_for(springs) {
             Some(pool) if blocks.len() > 1 => self.map_items(pool, blocks, f),
             _ => blocks.into_iter().map(f).collect(),
