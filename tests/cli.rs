@@ -1,12 +1,17 @@
 //! The `hooke run` command end to end: reports, CSV output, exit codes, bad input.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn hooke(args: &[&str]) -> Output {
+    hooke_in(Path::new(env!("CARGO_MANIFEST_DIR")), args)
+}
+
+/// `hooke` run in `dir`.
+fn hooke_in(dir: &Path, args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_hooke"))
         .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .current_dir(dir)
         .output()
         .expect("the hooke binary runs")
 }
@@ -348,13 +353,7 @@ fn an_unwritable_out_is_refused_before_the_run() {
 fn report_scenes_run_from_any_folder() {
     let empty = temp("elsewhere");
     std::fs::create_dir_all(&empty).unwrap();
-    let elsewhere = |args: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_hooke"))
-            .args(args)
-            .current_dir(&empty)
-            .output()
-            .expect("the hooke binary runs")
-    };
+    let elsewhere = |args: &[&str]| hooke_in(&empty, args);
     let o = elsewhere(&[
         "run",
         "--scene",
