@@ -388,6 +388,17 @@ fn run(args: RunArgs) -> ExitCode {
     if let Some(note) = &r.device_note {
         eprintln!("hooke: {note}");
     }
+    // `--time` counts whole steps: one under half a step runs none, which would pass unsaid.
+    if let Some(t) = args.time
+        && t > 0.0
+        && r.steps == 0
+    {
+        eprintln!(
+            "hooke: --time {t} s is under half a step (dt {} s): no step ran; give a longer \
+             --time, a smaller --dt or --steps",
+            r.dt
+        );
+    }
     if args.profile && r.device == runner::Device::Gpu {
         eprintln!(
             "hooke: --profile times the CPU's passes; the steps ran on the GPU, untimed by pass"

@@ -388,7 +388,21 @@ fn the_summary_says_one_particle() {
     );
 }
 
-/// `hooke bench perf` checks its flags before measuring anything.
+/// A `--time` shorter than half a step runs no step, and says so rather than passing unsaid.
+#[test]
+fn a_time_under_half_a_step_says_no_step_ran() {
+    let o = hooke(&["run", "--scene", "rope", "--time", "0.00004"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--time 0.00004 s is under half a step (dt 0.0001 s): no step ran"),
+        "{}",
+        stderr(&o)
+    );
+    // A time of 0 asks for no step: nothing to say.
+    let o = hooke(&["run", "--scene", "rope", "--time", "0"]);
+    assert_eq!(stderr(&o), "");
+}
+
 /// `--separate-passes` runs the particle passes as systems of their own: the same state bit for
 /// bit (the JSON's floats round-trip).
 #[test]
@@ -462,6 +476,7 @@ fn bench_scale_writes_its_report() {
     }
 }
 
+/// `hooke bench perf` checks its flags before measuring anything.
 #[test]
 fn bad_bench_flags() {
     let cases: [(&[&str], &str); 4] = [
