@@ -470,9 +470,34 @@ fn run(args: RunArgs) -> ExitCode {
     }
     if !r.finite {
         eprintln!(
-            "hooke: the simulation blew up (non-finite state) at step {}",
+            "hooke: the simulation blew up (a non-finite state or energy) at step {}",
             r.blowup_step.map_or("?".into(), |s| s.to_string())
         );
+        // The likeliest cause a newcomer meets: a step past what the method can take.
+        if let Some(stable) = r.stable_dt.filter(|&s| r.dt > s) {
+            let any_step: Vec<_> = Integrator::ALL
+                .iter()
+                .filter(|i| i.unconditionally_stable())
+                .map(|i| i.cli_name())
+                .collect();
+            let past = if stable > 0.0 {
+                format!(
+                    "dt {} s is past this scene's stable step under {}, {stable:.3e} s: give a \
+                     smaller --dt, or",
+                    r.dt, r.integrator
+                )
+            } else {
+                // Explicit Euler without damping: no step is small enough.
+                format!(
+                    "{} is unstable at any step without damping: give --damping > 0, or",
+                    r.integrator
+                )
+            };
+            eprintln!(
+                "hooke: {past} an --integrator stable at any step ({})",
+                any_step.join(", ")
+            );
+        }
         return ExitCode::from(BLEW_UP);
     }
     ExitCode::SUCCESS

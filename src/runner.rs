@@ -239,7 +239,8 @@ pub struct RunReport {
     /// Why a run asked for on the GPU ran on the CPU.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub device_note: Option<String>,
-    /// The 1-based step that produced a non-finite value, if one did. The final state (and
+    /// The 1-based step that produced a non-finite value, or a state whose energy is not finite
+    /// (with [`crate::sim::watch::EnergyPeak`], which `hooke run` keeps), if one did. The final state (and
     /// `--out`) is then the last finite one, at the end of the tick before.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub blowup_step: Option<u64>,

@@ -182,6 +182,47 @@ fn a_blow_up_stops_the_run_with_exit_code_3() {
     let step = r["blowup_step"].as_u64().expect("names the step");
     assert!(step > 1 && step < 5000, "{step}");
     assert_eq!(r["steps_taken"].as_u64(), Some(step));
+    assert!(
+        stderr(&o).contains("explicit-euler is unstable at any step without damping"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+/// A state can stay finite while its energy overflows (speeds past 1e154 m/s): the rope under
+/// explicit Euler at a frame's step reached positions of 1e151 m and ended "finite" with exit
+/// 0. It is a blow-up, and the message names the stable step it passed.
+#[test]
+fn an_overflowing_energy_is_a_blow_up() {
+    let o = hooke(&[
+        "run",
+        "--scene",
+        "rope",
+        "--integrator",
+        "explicit-euler",
+        "--dt",
+        "1/60",
+        "--time",
+        "5",
+        "--json",
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let r = json(&o);
+    assert_eq!(r["finite"], false);
+    let step = r["blowup_step"].as_u64().expect("names the step");
+    assert!(step > 1 && step < 300, "{step}");
+    // What is reported is the last state before it: energies a number, not null.
+    assert!(r["energy_end"].as_f64().is_some_and(f64::is_finite), "{r}");
+    assert!(r["energy_max"].as_f64().is_some_and(f64::is_finite), "{r}");
+    let err = stderr(&o);
+    assert!(
+        err.contains(
+            "dt 0.016666666666666666 s is past this scene's stable step under \
+             explicit-euler, 5.052e-5 s: give a smaller --dt, or an --integrator stable at any \
+             step (implicit-euler, projective-dynamics, xpbd, bdf2, vbd)"
+        ),
+        "{err}"
+    );
 }
 
 #[test]

@@ -165,7 +165,9 @@ pub enum SimStatus {
     #[default]
     /// Healthy.
     Running,
-    /// A step produced a non-finite position or velocity. The simulation paused itself.
+    /// A step produced a non-finite position or velocity, or (where
+    /// [`crate::sim::watch::EnergyPeak`] is kept) a state whose energy is not finite. The
+    /// simulation paused itself.
     BlewUp {
         /// The 1-based number of the step that did it.
         step: u64,

@@ -65,15 +65,23 @@ impl EnergyPeak {
 }
 
 /// After every step, with [`EnergyPeak`] present: its total energy against the peak.
+///
+/// An energy that is not finite, from a state that still is (speeds past 1e154 m/s: rope
+/// under explicit Euler at 1/60 s), is a blow-up as surely as a NaN, and the step is refused
+/// like one: without this, such a run ended "finite" with positions of 1e151 m.
 pub(crate) fn track_energy_peak(
-    solver: Res<Solver>,
+    mut solver: ResMut<Solver>,
     params: Res<SimParams>,
     threads: Res<SolverThreads>,
     mut peak: ResMut<EnergyPeak>,
 ) {
     let clock = std::time::Instant::now();
     let e = solver.energy_now(params.gravity, &threads).total();
-    peak.note(e);
+    if e.is_finite() {
+        peak.note(e);
+    } else {
+        solver.non_finite = true;
+    }
     peak.seconds += clock.elapsed().as_secs_f64();
 }
 
