@@ -391,7 +391,7 @@ fn an_unwritable_out_is_refused_before_the_run() {
 /// Outside the repository (an installed `hooke`) the report scenes are built in: a run of one
 /// by its path, and the stability report over the hard cases, from an empty folder.
 #[test]
-fn report_scenes_run_from_any_folder() {
+fn shipped_scenes_run_from_any_folder() {
     let empty = temp("elsewhere");
     std::fs::create_dir_all(&empty).unwrap();
     let elsewhere = |args: &[&str]| hooke_in(&empty, args);
@@ -413,6 +413,17 @@ fn report_scenes_run_from_any_folder() {
     // A folder named that does not exist, and is none of the built-in ones, is still refused.
     let o = elsewhere(&["bench", "stability", "--scenes", "nowhere", "--steps", "1"]);
     assert_bad_input(&o, "no scene files in nowhere");
+
+    // The app's scenes by their shipped paths too, as the guide writes them.
+    let o = elsewhere(&["run", "--scene", "assets/scenes/pile.ron", "--steps", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // A built-in's name with `.ron`, where no such file is: the name is pointed to.
+    let o = elsewhere(&["run", "--scene", "rope.ron", "--steps", "1"]);
+    assert_bad_input(&o, "cannot read scene rope.ron: ");
+    assert_bad_input(
+        &o,
+        "; the built-in scene of that name is `rope`, without `.ron`",
+    );
 }
 
 /// The summary counts in words that agree with their numbers: one particle and one step are

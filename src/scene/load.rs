@@ -58,7 +58,18 @@ impl fmt::Display for SceneError {
                 )
             }
             SceneError::Io { path, error } => {
-                write!(f, "cannot read scene {}: {error}", path.display())
+                write!(f, "cannot read scene {}: {error}", path.display())?;
+                // `--scene rope.ron` outside the repository: the name was meant.
+                let stem = path.file_stem().and_then(|s| s.to_str());
+                match stem.filter(|s| super::presets::names().contains(s)) {
+                    Some(name) if error.kind() == std::io::ErrorKind::NotFound => {
+                        write!(
+                            f,
+                            "; the built-in scene of that name is `{name}`, without `.ron`"
+                        )
+                    }
+                    _ => Ok(()),
+                }
             }
             SceneError::Parse {
                 path,

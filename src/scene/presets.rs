@@ -95,13 +95,16 @@ pub fn names() -> Vec<&'static str> {
     BUILTIN.iter().map(|(n, _)| *n).collect()
 }
 
-/// Loads a scene by file path or, when no such file exists, by built-in name. A name that is
-/// neither (no path separator, no `.ron`) is answered with the built-in names near it, or with
-/// all of them.
+/// Loads a scene by file path or, when no such file exists, by built-in name or by a shipped
+/// scene's path (`assets/scenes/rope.ron` in any folder). A name that is neither (no path
+/// separator, no `.ron`) is answered with the built-in names near it, or with all of them.
 pub fn resolve(name_or_path: &str) -> Result<LoadedScene, SceneError> {
     let path = Path::new(name_or_path);
     if !path.exists() {
-        if let Some((name, text)) = BUILTIN.iter().find(|(n, _)| *n == name_or_path) {
+        let builtin = BUILTIN.iter().find(|(n, _)| {
+            *n == name_or_path || path == Path::new(&format!("assets/scenes/{n}.ron"))
+        });
+        if let Some((name, text)) = builtin {
             return LoadedScene::parse(text, &PathBuf::from(format!("assets/scenes/{name}.ron")));
         }
         if let Some((shipped, text)) = REPORT_SCENES.iter().find(|(p, _)| Path::new(p) == path) {
