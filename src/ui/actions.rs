@@ -4,7 +4,6 @@
 use super::history::{self, History};
 use crate::scene::{CurrentScene, LoadedScene, load_into_world, presets, snapshot, to_ron};
 use bevy::prelude::*;
-use bevy::window::FileDragAndDrop;
 use std::path::Path;
 
 /// A message for the panel after a keyboard or button action: (text, is an error).
@@ -98,24 +97,18 @@ pub fn open(world: &mut World, scene: &LoadedScene) {
     replace_scene(world, "load", scene);
 }
 
-/// Files dropped on the window: each opens as [`open_file`] opens it.
-pub fn open_dropped_files(mut drops: MessageReader<FileDragAndDrop>, mut commands: Commands) {
-    for drop in drops.read() {
-        if let FileDragAndDrop::DroppedFile { path_buf, .. } = drop {
-            let path = path_buf.clone();
-            commands.queue(move |w: &mut World| open_file(w, &path));
-        }
-    }
+/// Whether `path` names a scene file by its extension, `.ron` in any case: what a drop or an
+/// open looks at before reading it.
+pub fn is_scene_file(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ron"))
 }
 
 /// Opens the scene file at `path` as the picker opens one (an edit: undo takes it back). A file
 /// that is no scene file, or one that does not load, leaves what is on screen as it is, and the
 /// panel says why.
 pub fn open_file(world: &mut World, path: &Path) {
-    let refused = if !path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("ron"))
-    {
+    let refused = if !is_scene_file(path) {
         Some(format!(
             "{} is not a scene: hooke opens scene files (.ron)",
             path.display()
@@ -211,6 +204,7 @@ mod tests {
     /// a broken scene, changes nothing and the panel says why.
     #[test]
     fn a_dropped_scene_file_opens() {
+        use bevy::window::FileDragAndDrop;
         let dir = std::env::temp_dir().join(format!("hooke-drop-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let good = dir.join("three.ron");
@@ -226,8 +220,9 @@ mod tests {
 
         let mut app = crate::headless_app();
         app.init_resource::<History>()
+            .init_resource::<super::super::drop::FilesOver>()
             .add_message::<FileDragAndDrop>()
-            .add_systems(Update, open_dropped_files);
+            .add_systems(Update, super::super::drop::follow_file_drags);
         open(app.world_mut(), &presets::resolve("rope").unwrap());
         let particles = |app: &mut App| {
             let w = app.world_mut();

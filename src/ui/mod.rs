@@ -5,6 +5,7 @@ mod automation;
 mod card_draw;
 mod controls;
 mod draw;
+mod drop;
 mod edit;
 mod events;
 mod history;
@@ -56,6 +57,7 @@ impl Plugin for AppPlugin {
             .init_resource::<events::PressedAt>()
             .init_resource::<events::KeyPresses>()
             .init_resource::<controls::HelpOverlay>()
+            .init_resource::<drop::FilesOver>()
             .init_resource::<quit::QuitPrompt>()
             .init_resource::<plots::Timeline>()
             .init_resource::<crate::sim::watch::EnergyWatch>()
@@ -85,7 +87,13 @@ impl Plugin for AppPlugin {
             )
             .add_systems(
                 EguiPrimaryContextPass,
-                (panel::side_panel, controls::help_overlay, quit::quit_prompt).chain(),
+                (
+                    panel::side_panel,
+                    controls::help_overlay,
+                    drop::drop_hint,
+                    quit::quit_prompt,
+                )
+                    .chain(),
             )
             // The state before a tear, for undo: after the springs are found, before they go.
             .add_systems(
@@ -124,7 +132,7 @@ impl Plugin for AppPlugin {
                     stats::estimate_stability,
                     plots::sample.after(stats::estimate_stability),
                     automation::drive,
-                    actions::open_dropped_files.run_if(quit::no_prompt),
+                    drop::follow_file_drags.run_if(quit::no_prompt),
                     quit::close_requested,
                     title::window_title,
                     pace::pace_frames,

@@ -1,0 +1,172 @@
+//! Files dragged onto the window: while they hover, the canvas says what a drop will do, so
+//! that a picture dragged by mistake is named before it is let go; a drop opens the scene
+//! ([`actions::open_file`]).
+
+use super::actions;
+use bevy::prelude::*;
+use bevy::window::FileDragAndDrop;
+use bevy_egui::{EguiContexts, egui};
+use std::path::{Path, PathBuf};
+
+/// The files over the window now, in the order the system named them (none: no drag).
+#[derive(Resource, Debug, Clone, Default)]
+pub struct FilesOver(pub Vec<PathBuf>);
+
+/// Follows drags over the window; a drop opens each file dropped, in order (the last one that
+/// loads stays on screen, the others are in the undo history).
+pub fn follow_file_drags(
+    mut drags: MessageReader<FileDragAndDrop>,
+    mut over: ResMut<FilesOver>,
+    mut commands: Commands,
+) {
+    for drag in drags.read() {
+        match drag {
+            FileDragAndDrop::HoveredFile { path_buf, .. } => {
+                if !over.0.contains(path_buf) {
+                    over.0.push(path_buf.clone());
+                }
+            }
+            FileDragAndDrop::HoveredFileCanceled { .. } => over.0.clear(),
+            FileDragAndDrop::DroppedFile { path_buf, .. } => {
+                over.0.clear();
+                let path = path_buf.clone();
+                commands.queue(move |w: &mut World| actions::open_file(w, &path));
+            }
+        }
+    }
+}
+
+/// What letting `files` go will do, in a line: (text, whether nothing will open).
+pub fn what_a_drop_does(files: &[PathBuf]) -> (String, bool) {
+    let name = |p: &Path| {
+        p.file_name()
+            .map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into())
+    };
+    let scenes: Vec<&PathBuf> = files.iter().filter(|p| actions::is_scene_file(p)).collect();
+    match (files, scenes.last()) {
+        ([one], Some(_)) => (format!("Drop to open {}", name(one)), false),
+        ([one], None) => (
+            format!(
+                "{} is not a scene: hooke opens scene files (.ron)",
+                name(one)
+            ),
+            true,
+        ),
+        (_, Some(last)) => (
+            format!(
+                "Drop to open {} (the last scene of {} files)",
+                name(last),
+                files.len()
+            ),
+            false,
+        ),
+        (_, None) => (
+            format!(
+                "None of these {} files is a scene: hooke opens scene files (.ron)",
+                files.len()
+            ),
+            true,
+        ),
+    }
+}
+
+/// The line, over the canvas's middle, while files hover.
+pub fn drop_hint(mut contexts: EguiContexts, over: Res<FilesOver>) -> Result {
+    if over.0.is_empty() {
+        return Ok(());
+    }
+    let (text, refused) = what_a_drop_does(&over.0);
+    let ctx = contexts.ctx_mut()?;
+    egui::Area::new(egui::Id::new("file-drop-hint"))
+        .anchor(egui::Align2::CENTER_CENTER, [140.0, 0.0])
+        .order(egui::Order::Foreground)
+        .interactable(false)
+        .show(ctx, |ui| {
+            egui::Frame::popup(ui.style()).show(ui, |ui| {
+                let text = egui::RichText::new(text).heading();
+                let text = if refused {
+                    text.color(ui.visuals().error_fg_color)
+                } else {
+                    text
+                };
+                // One line, however narrow the area's first guess at its width.
+                ui.add(egui::Label::new(text).wrap_mode(egui::TextWrapMode::Extend));
+            });
+        });
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_hint_says_what_a_drop_opens() {
+        let p = |s: &str| PathBuf::from(s);
+        let cases = [
+            (
+                vec![p("/home/a/my_cloth.ron")],
+                "Drop to open my_cloth.ron",
+                false,
+            ),
+            (
+                vec![p("/tmp/cat.png")],
+                "cat.png is not a scene: hooke opens scene files (.ron)",
+                true,
+            ),
+            (
+                vec![p("a.ron"), p("b.RON"), p("c.txt")],
+                "Drop to open b.RON (the last scene of 3 files)",
+                false,
+            ),
+            (
+                vec![p("a.txt"), p("b")],
+                "None of these 2 files is a scene: hooke opens scene files (.ron)",
+                true,
+            ),
+        ];
+        for (files, text, refused) in cases {
+            assert_eq!(what_a_drop_does(&files), (text.to_string(), refused));
+        }
+    }
+
+    /// Hovering fills the list, a cancel or a drop empties it, and a drop opens the file.
+    #[test]
+    fn a_drag_is_followed_and_a_drop_opens() {
+        let dir = std::env::temp_dir().join(format!("hooke-drag-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let scene = dir.join("two.ron");
+        std::fs::write(
+            &scene,
+            "(particles: [(pos: (0.4, 0.5)), (pos: (0.6, 0.5))])",
+        )
+        .unwrap();
+
+        let mut app = crate::headless_app();
+        app.init_resource::<super::super::history::History>()
+            .init_resource::<FilesOver>()
+            .add_message::<FileDragAndDrop>()
+            .add_systems(Update, follow_file_drags);
+        let window = Entity::PLACEHOLDER;
+        let send = |app: &mut App, m: FileDragAndDrop| {
+            app.world_mut().write_message(m);
+            app.update();
+            app.world().resource::<FilesOver>().0.clone()
+        };
+        let hover = FileDragAndDrop::HoveredFile {
+            window,
+            path_buf: scene.clone(),
+        };
+        assert_eq!(send(&mut app, hover.clone()), vec![scene.clone()]);
+        assert_eq!(send(&mut app, hover.clone()), vec![scene.clone()]);
+        assert!(send(&mut app, FileDragAndDrop::HoveredFileCanceled { window }).is_empty());
+        send(&mut app, hover);
+        let dropped = FileDragAndDrop::DroppedFile {
+            window,
+            path_buf: scene,
+        };
+        assert!(send(&mut app, dropped).is_empty());
+        let w = app.world_mut();
+        assert_eq!(w.query::<&crate::sim::Particle>().iter(w).count(), 2);
+    }
+}
