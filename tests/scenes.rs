@@ -340,6 +340,62 @@ fn a_missing_field_is_named_with_its_place() {
     }
 }
 
+/// The slips of someone who writes JSON, or the command line's fractions, are named with what
+/// RON wants, at their line, in place of ron's own words ("Unexpected char '6'", "Expected
+/// opening `(`", "Expected identifier").
+#[test]
+fn a_slip_from_json_or_the_command_line_is_named_with_the_ron_for_it() {
+    for (from, to, line, says) in [
+        (
+            "dt: 0.0001,",
+            "dt: 1/60,",
+            6,
+            "RON has no fractions: write 1/60 as 0.016666666666666666",
+        ),
+        (
+            "dt: 0.0001,",
+            "dt: 1.0 / 3.0,",
+            6,
+            "write 1.0/3.0 as 0.3333333333333333",
+        ),
+        (
+            "integrator: SymplecticEuler,",
+            "integrator: \"Xpbd\",",
+            5,
+            "a name is written without quotes: `Xpbd`, not `\"Xpbd\"`",
+        ),
+        (
+            "gravity: (0.0, -9.8),",
+            "gravity: [0.0, -9.8],",
+            2,
+            "a pair or a struct is written in parentheses: (0.0, -9.8), not [0.0, -9.8]",
+        ),
+        (
+            "(pos: (0.5, 0.8),",
+            "(pos: [0.5, 0.8],",
+            9,
+            "in parentheses: (0.5, 0.8), not [0.5, 0.8]",
+        ),
+        (
+            "springs: [",
+            "springs: (",
+            11,
+            "a list is written in brackets: [ … ], not ( … )",
+        ),
+    ] {
+        let msg = parse(&scene_text(|s| s.replacen(from, to, 1)))
+            .expect_err(to)
+            .to_string();
+        assert!(msg.starts_with(&format!("bad.ron:{line}:")), "{to}: {msg}");
+        assert!(msg.contains(says), "{to}: {msg}");
+    }
+    // A `/` that is no fraction keeps ron's words.
+    let msg = parse(&scene_text(|s| s.replacen("dt: 0.0001,", "dt: 1/x,", 1)))
+        .unwrap_err()
+        .to_string();
+    assert!(!msg.contains("fraction"), "{msg}");
+}
+
 #[test]
 fn spring_to_itself() {
     let msg = invalid(|s| s.replace("(a: 0, b: 1,", "(a: 1, b: 1,"));

@@ -137,7 +137,7 @@ impl LoadedScene {
                 path: path.to_owned(),
                 line: e.span.start.line,
                 col: e.span.start.col,
-                message: super::typo::message(&e.code),
+                message: super::typo::message(&e.code, text, e.span.start.line, e.span.start.col),
             })?;
         Self::from_scene(scene, Some(path.to_owned()))
     }

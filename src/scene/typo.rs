@@ -1,15 +1,22 @@
 //! Parse errors in words a scene's author can act on: an unknown field or variant is named with
-//! the names it could have meant.
+//! the names it could have meant, and the slips of someone who writes JSON or the command line's
+//! fractions (a quoted name, brackets for a pair, `1/60`) are named with what RON wants instead.
 //!
 //! Every struct of the format denies unknown fields (`#[serde(deny_unknown_fields)]`), because
 //! a misspelled optional field that is silently ignored runs a different scene from the one
 //! written: `(pos: (0.5, 0.5), masss: 5.0)` would weigh 1 kg. RON reports such a field with the
 //! list of the names it expected; this module picks the near ones out of that list.
 
-/// The message for a RON error: ron's own words, except for an unknown field or variant, which
-/// is named with its place in the scene, the near names, and every name allowed there, and a
-/// missing field, named with its place.
-pub(crate) fn message(code: &ron::Error) -> String {
+/// The message for a RON error at `line`:`col` (1-based) of `text`: ron's own words, except for
+/// an unknown field or variant, which is named with its place in the scene, the near names, and
+/// every name allowed there; a missing field, named with its place; and the slips of
+/// [`slip`].
+pub(crate) fn message(code: &ron::Error, text: &str, line: usize, col: usize) -> String {
+    let (before, after) = around(text, line, col);
+    // ron's own words there ("Unexpected char '6'") would mislead: the hint replaces them.
+    if let Some(hint) = slip(code, before, after.trim_start()) {
+        return hint;
+    }
     match code {
         ron::Error::NoSuchStructField {
             expected,
@@ -26,6 +33,61 @@ pub(crate) fn message(code: &ron::Error) -> String {
             format!("missing field `{field}`{place} (every field: docs/scene-format.md)")
         }
         other => other.to_string(),
+    }
+}
+
+/// The line of the error split at it: what comes before, what from it on.
+fn around(text: &str, line: usize, col: usize) -> (&str, &str) {
+    let row = text.lines().nth(line.saturating_sub(1)).unwrap_or("");
+    let at = row
+        .char_indices()
+        .nth(col.saturating_sub(1))
+        .map_or(row.len(), |(i, _)| i);
+    row.split_at(at)
+}
+
+/// What a newcomer to RON writes out of habit, and what RON wants instead (`after` starts at
+/// the error's first character that is not a space):
+/// - a quoted name where a name is wanted (`integrator: "Xpbd"`, as in JSON);
+/// - a fraction (`dt: 1/60`, which the command line takes): RON reads `/` as a comment;
+/// - brackets for a pair or a struct (`gravity: [0.0, -9.8]`), parentheses for a list.
+fn slip(code: &ron::Error, before: &str, after: &str) -> Option<String> {
+    match code {
+        ron::Error::ExpectedIdentifier => {
+            let quoted = after.strip_prefix('"')?;
+            let name = &quoted[..quoted.find('"')?];
+            Some(format!(
+                "a name is written without quotes: `{name}`, not `\"{name}\"`"
+            ))
+        }
+        ron::Error::UnexpectedChar(_) => {
+            // ron stops at the `/` (a comment's start) or just past it.
+            let (head, tail) = match before.trim_end().strip_suffix('/') {
+                Some(head) => (head.trim_end(), after),
+                None => (before.trim_end(), after.strip_prefix('/')?.trim_start()),
+            };
+            let number = |c: char| c.is_ascii_digit() || matches!(c, '.' | 'e' | 'E' | '_');
+            let p = &head[head.trim_end_matches(number).len()..];
+            let q = &tail[..tail.len() - tail.trim_start_matches(number).len()];
+            let value = p.parse::<f64>().ok()? / q.parse::<f64>().ok()?;
+            value.is_finite().then(|| {
+                format!(
+                    "RON has no fractions: write {p}/{q} as {value:?} (the command line's \
+                     --dt and --time take fractions)"
+                )
+            })
+        }
+        ron::Error::ExpectedStructLike | ron::Error::ExpectedNamedStructLike(_) => {
+            let inside = after.strip_prefix('[')?;
+            let inside = &inside[..inside.find(']')?];
+            Some(format!(
+                "a pair or a struct is written in parentheses: ({inside}), not [{inside}]"
+            ))
+        }
+        ron::Error::ExpectedArray => after
+            .starts_with('(')
+            .then(|| "a list is written in brackets: [ … ], not ( … )".to_string()),
+        _ => None,
     }
 }
 
