@@ -505,8 +505,8 @@ fn run(args: RunArgs) -> ExitCode {
 
 fn work_precision(out: &std::path::Path, quick: bool) -> ExitCode {
     use hooke::bench::{plot, work_precision as wp};
-    if let Err(e) = std::fs::create_dir_all(out) {
-        return fail(format!("cannot create {}: {e}", out.display()));
+    if let Err(e) = report_folder(out) {
+        return fail(e);
     }
     let problems = wp::problems(quick);
     // The card's f32 points where this build and this machine have a card.
@@ -548,8 +548,8 @@ fn work_precision(out: &std::path::Path, quick: bool) -> ExitCode {
 
 fn contact(out: &std::path::Path) -> ExitCode {
     use hooke::bench::{contact as ct, plot};
-    if let Err(e) = std::fs::create_dir_all(out) {
-        return fail(format!("cannot create {}: {e}", out.display()));
+    if let Err(e) = report_folder(out) {
+        return fail(e);
     }
     let machine = hooke::bench::machine();
     eprintln!("hooke bench contact on {machine}");
@@ -576,8 +576,8 @@ fn contact(out: &std::path::Path) -> ExitCode {
 
 fn large_steps(out: &std::path::Path) -> ExitCode {
     use hooke::bench::{large_steps as ls, plot};
-    if let Err(e) = std::fs::create_dir_all(out) {
-        return fail(format!("cannot create {}: {e}", out.display()));
+    if let Err(e) = report_folder(out) {
+        return fail(e);
     }
     let machine = hooke::bench::machine();
     eprintln!("hooke bench large-steps on {machine}");
@@ -626,8 +626,8 @@ fn perf(out: &std::path::Path, threads: Vec<usize>, budget: f64, repeat: usize) 
     if repeat == 0 {
         return fail("--repeat must be at least 1");
     }
-    if let Err(e) = std::fs::create_dir_all(out) {
-        return fail(format!("cannot create {}: {e}", out.display()));
+    if let Err(e) = report_folder(out) {
+        return fail(e);
     }
     let progress = |w: &str| eprintln!("  {w}");
     let (rows, loads) = match perf::run(&perf::WIDTHS, &threads, budget, repeat, progress) {
@@ -686,6 +686,9 @@ fn scale(
             Err(e) => fail(e),
         };
     }
+    if let Err(e) = report_folder(out) {
+        return fail(e);
+    }
     let machine = hooke::bench::machine();
     eprintln!("hooke bench scale on {machine}");
     let exe = match std::env::current_exe() {
@@ -732,8 +735,8 @@ fn stability(out: &std::path::Path, scenes: &std::path::Path, steps: u64) -> Exi
     if steps == 0 {
         return fail("--steps must be at least 1");
     }
-    if let Err(e) = std::fs::create_dir_all(out) {
-        return fail(format!("cannot create {}: {e}", out.display()));
+    if let Err(e) = report_folder(out) {
+        return fail(e);
     }
     let rows = match st::run(&scenes, steps, |what| eprintln!("  {what}")) {
         Ok(r) => r,
@@ -751,10 +754,6 @@ fn stability(out: &std::path::Path, scenes: &std::path::Path, steps: u64) -> Exi
 #[cfg(feature = "gpu")]
 fn gpu(out: &std::path::Path, widths: Vec<usize>, budget: f64, repeat: usize) -> ExitCode {
     use hooke::bench::gpu;
-    let card = match hooke::solver::gpu::Gpu::open() {
-        Ok(c) => c,
-        Err(e) => return fail(format!("bench gpu: {e}")),
-    };
     if !(budget.is_finite() && budget > 0.0) {
         return fail(format!("--budget must be finite and > 0, got {budget}"));
     }
@@ -766,6 +765,13 @@ fn gpu(out: &std::path::Path, widths: Vec<usize>, budget: f64, repeat: usize) ->
     if let Some(w) = widths.iter().find(|&&w| !(2..=4096).contains(&w)) {
         return fail(format!("--widths: each from 2 to 4096, got {w}"));
     }
+    if let Err(e) = report_folder(out) {
+        return fail(e);
+    }
+    let card = match hooke::solver::gpu::Gpu::open() {
+        Ok(c) => c,
+        Err(e) => return fail(format!("bench gpu: {e}")),
+    };
     let machine = hooke::bench::machine();
     eprintln!("hooke bench gpu on {machine} and {}", card.adapter());
     let rows = match gpu::run(&card, &widths, budget, repeat, |w| eprintln!("  {w}")) {
@@ -817,6 +823,23 @@ fn write_files(out: &std::path::Path, files: &[(&str, &str)]) -> Result<(), Stri
                 .try_for_each(|(name, text)| std::fs::write(out.join(name), text))
         })
         .map_err(|e| format!("cannot write the report into {}: {e}", out.display()))
+}
+
+/// The folder a report goes into, made if missing and tried with a file, before anything is
+/// measured: a report that could not be written would lose minutes of measurement at its end
+/// (`bench scale`, `bench gpu` on a card lent for minutes).
+fn report_folder(out: &std::path::Path) -> Result<(), String> {
+    if out.exists() && !out.is_dir() {
+        return Err(format!(
+            "--out: {} is a file; a report goes into a folder (of several files)",
+            out.display()
+        ));
+    }
+    let probe = out.join(".hooke-write-check");
+    std::fs::create_dir_all(out)
+        .and_then(|()| std::fs::write(&probe, b""))
+        .and_then(|()| std::fs::remove_file(&probe))
+        .map_err(|e| format!("--out: cannot write into {}: {e}", out.display()))
 }
 
 /// Whether a file could be written at `path`, named by its `flag`: its folder exists, and the

@@ -552,6 +552,36 @@ fn bad_bench_flags() {
     }
 }
 
+/// Every report checks its `--out` folder before it measures: a file there, where the folder
+/// goes, is refused at once, not after minutes of measurement (`bench scale` and `bench gpu`
+/// measured first and lost their figures at the end).
+#[test]
+fn every_bench_refuses_an_out_that_is_a_file_before_measuring() {
+    let file = temp("a-file-not-a-folder");
+    std::fs::write(&file, "").unwrap();
+    let out = file.to_str().unwrap();
+    for bench in [
+        "work-precision",
+        "stability",
+        "large-steps",
+        "contact",
+        "perf",
+        "scale",
+        "gpu",
+    ] {
+        let o = hooke(&["bench", bench, "--out", out]);
+        if bench == "gpu" && stderr(&o).contains("built without the `gpu` feature") {
+            continue;
+        }
+        assert_bad_input(
+            &o,
+            &format!("--out: {out} is a file; a report goes into a folder"),
+        );
+        // The refusal is all it printed: no measurement's progress before it.
+        assert_eq!(stderr(&o).lines().count(), 1, "{bench}: {}", stderr(&o));
+    }
+}
+
 /// Every bad-scene case, through the real binary: exit code 2, and stderr names the file and
 /// the problem.
 #[test]
