@@ -323,7 +323,11 @@ fn the_parameters_left_out_are_the_apps() {
 #[test]
 fn a_missing_field_is_named_with_its_place() {
     for (from, to, names) in [
-        (", rest: 0.1)", ")", ["missing field `rest`", "in a spring"]),
+        (
+            "(a: 0, b: 1, ",
+            "(a: 0, ",
+            ["missing field `b`", "in a spring"],
+        ),
         (
             "(pos: (0.5, 0.9), ",
             "(",
@@ -500,6 +504,68 @@ fn a_saved_scene_loads_back_unchanged() {
     hooke::sim::pack(again.world_mut()).unwrap();
     assert_eq!(solver(&again).x(), solver(&app).x());
     assert_eq!(solver(&again).v(), solver(&app).v());
+}
+
+/// A spring written without `rest` is at rest where the scene draws it: its ends may be
+/// explicit particles or a generator's, and it may carry a material. Without gravity such a
+/// network stays where it is; before, `rest` was required, and a person computed 0.206155 by
+/// hand (the walker's diagonals).
+#[test]
+fn a_spring_without_rest_is_at_rest_where_drawn() {
+    for dashpot in ["", ", damping: Some(0.5)"] {
+        let text = format!(
+            "(gravity: (0.0, 0.0), ground: None,
+              particles: [(pos: (0.4, 0.5)), (pos: (0.6, 0.5)), (pos: (0.5, 0.7))],
+              generate: [Chain(from: (0.7, 0.5), to: (0.9, 0.6), segments: 3)],
+              springs: [(a: 0, b: 1{dashpot}), (a: 1, b: 2), (a: 2, b: 0, rest: 0.3),
+                        (a: 2, b: 6), (a: 0, b: 5, stiffness: 500.0)])"
+        );
+        let loaded = parse(&text).unwrap_or_else(|e| panic!("{e}"));
+        let mut app = hooke::headless_app();
+        load_into_world(app.world_mut(), &loaded);
+        hooke::sim::pack(app.world_mut()).unwrap();
+        let s = solver(&app);
+        let x = s.x().to_vec();
+        let mut rests: Vec<f64> = s.springs().iter().map(|sp| sp.rest).collect();
+        let d = |a: usize, b: usize| (x[a] - x[b]).length();
+        // The explicit springs, then the chain's own three (the solver keeps its own order).
+        let mut want = [
+            d(0, 1),
+            d(1, 2),
+            0.3,
+            d(2, 6),
+            d(0, 5),
+            d(3, 4),
+            d(4, 5),
+            d(5, 6),
+        ];
+        rests.sort_by(f64::total_cmp);
+        want.sort_by(f64::total_cmp);
+        assert_eq!(rests, want, "{dashpot}");
+        app.world_mut()
+            .resource_mut::<hooke::sim::SimParams>()
+            .paused = false;
+        step(&mut app, 200);
+        let moved = max_difference(solver(&app).x(), &x);
+        // Only the one spring written at 0.3 pulls.
+        assert!(moved > 1e-6, "{dashpot}: the 0.3 spring pulls: {moved}");
+        let at_rest = parse(&text.replace(", rest: 0.3", ""))
+            .unwrap_or_else(|e| panic!("{e}"))
+            .scene;
+        let mut app = app_with(at_rest);
+        step(&mut app, 200);
+        let moved = max_difference(solver(&app).x(), &x);
+        assert!(
+            moved < 1e-12,
+            "{dashpot}: at rest as drawn, yet moved {moved} m"
+        );
+    }
+    // Saved, a rest length is written bare, as a person writes it.
+    let saved = to_ron(&parse("(particles: [(pos: (0.0, 0.5)), (pos: (0.1, 0.5))], springs: [(a: 0, b: 1, rest: 0.25)])").unwrap().scene).unwrap();
+    assert!(
+        saved.contains("rest: 0.25") && !saved.contains("rest: Some"),
+        "{saved}"
+    );
 }
 
 #[test]

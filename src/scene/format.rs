@@ -296,8 +296,15 @@ pub struct SpringDef {
     #[serde(default = "default_stiffness")]
     /// Stiffness, N/m; default 1e4.
     pub stiffness: f64,
-    /// Rest length, m.
-    pub rest: f64,
+    /// Rest length, m; left out, the distance between its ends where the scene places them (a
+    /// spring at rest as drawn; [`Scene::spring_defs`] gives it). Written bare (`rest: 0.1`),
+    /// as the scene files read it.
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "bare_number"
+    )]
+    pub rest: Option<f64>,
     /// Its dashpot c, N·s/m; default: the scene's `spring_damping`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub damping: Option<f64>,
@@ -309,6 +316,15 @@ pub struct SpringDef {
     pub plastic: Option<Plasticity>,
 }
 
+/// An optional number written as the number itself: the files read it so (ron's implicit
+/// `Some`), and `rest: 0.1` is what a person writes.
+fn bare_number<S: serde::Serializer>(value: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
+    match value {
+        Some(v) => s.serialize_f64(*v),
+        None => s.serialize_none(),
+    }
+}
+
 impl SpringDef {
     /// A plain Hooke spring.
     pub fn new(a: usize, b: usize, rest: f64, stiffness: f64) -> SpringDef {
@@ -316,7 +332,7 @@ impl SpringDef {
             a,
             b,
             stiffness,
-            rest,
+            rest: Some(rest),
             damping: None,
             actuation: None,
             plastic: None,

@@ -81,9 +81,33 @@ impl Scene {
         )
     }
 
+    /// Where the scene places particle `i` (explicit or generated), if there is one.
+    pub fn position(&self, i: usize) -> Option<(f64, f64)> {
+        if let Some(p) = self.particles.get(i) {
+            return Some(p.pos);
+        }
+        let mut base = self.particles.len();
+        for g in &self.generate {
+            let n = g.counts().0;
+            if i < base + n {
+                return Some(g.position(i - base));
+            }
+            base += n;
+        }
+        None
+    }
+
     /// The explicit springs, then each generator's (by particle index, rest at the initial
-    /// distance), in order.
+    /// distance), in order. Every one has its rest length: an explicit spring written without
+    /// one gets the distance between its ends where the scene places them.
     pub fn spring_defs(&self) -> impl Iterator<Item = SpringDef> + '_ {
+        let explicit = self.springs.iter().map(|s| SpringDef {
+            rest: s.rest.or_else(|| {
+                let (a, b) = (self.position(s.a)?, self.position(s.b)?);
+                Some((DVec2::from(a) - DVec2::from(b)).length())
+            }),
+            ..*s
+        });
         let bases = self.generate.iter().scan(self.particles.len(), |base, g| {
             let at = *base;
             *base += g.counts().0;
@@ -94,10 +118,7 @@ impl Scene {
             .iter()
             .zip(bases)
             .flat_map(|(g, base)| g.spring_defs(base));
-        Exact::new(
-            self.springs.iter().copied().chain(generated),
-            self.counts().1,
-        )
+        Exact::new(explicit.chain(generated), self.counts().1)
     }
 }
 
@@ -340,6 +361,10 @@ mod tests {
         // The chain's springs join 1-2, 2-3, 3-4; the grid's first spring joins 5 and 6.
         let ends: Vec<(usize, usize)> = springs.iter().map(|s| (s.a, s.b)).collect();
         assert_eq!(&ends[..4], &[(1, 2), (2, 3), (3, 4), (5, 6)]);
-        assert!(springs.iter().all(|s| s.a < np && s.b < np && s.rest > 0.0));
+        assert!(
+            springs
+                .iter()
+                .all(|s| s.a < np && s.b < np && s.rest > Some(0.0))
+        );
     }
 }

@@ -358,7 +358,7 @@ fn spawn_streamed(
                 .spawn(Spring::new(
                     entities[s.a],
                     entities[s.b],
-                    s.rest,
+                    s.rest.unwrap_or_default(),
                     s.stiffness,
                 ))
                 .id();
@@ -366,8 +366,14 @@ fn spawn_streamed(
         }
         return entities;
     }
-    let mut springs =
-        springs.map(|s| Spring::new(entities[s.a], entities[s.b], s.rest, s.stiffness));
+    let mut springs = springs.map(|s| {
+        Spring::new(
+            entities[s.a],
+            entities[s.b],
+            s.rest.unwrap_or_default(),
+            s.stiffness,
+        )
+    });
     let half = counts.map_or(0, |c| c.1 / 2);
     release(&mut reserved, world, half);
     world.spawn_batch(springs.by_ref().take(half));

@@ -196,11 +196,8 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
             ));
         }
         check_stiffness(&mut p, &at, s.stiffness);
-        if !(s.rest.is_finite() && s.rest >= 0.0) {
-            p.push(format!(
-                "{at}: rest must be finite and >= 0, got {}",
-                s.rest
-            ));
+        if let Some(rest) = s.rest.filter(|r| !(r.is_finite() && *r >= 0.0)) {
+            p.push(format!("{at}: rest must be finite and >= 0, got {rest}"));
         }
         check_damping(&mut p, &at, s.damping);
         if let Some(a) = s.actuation {
