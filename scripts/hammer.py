@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Random input against the app under Xvfb: clicks, drags with modifiers, the wheel, every
-key, for a while; then whether it is still alive, what it printed at WARN or ERROR, and its
-memory at the start and the end.
+key, and (with python-xlib) files dragged over the window and dropped or taken away: shipped
+scenes, a broken one, a picture; for a while; then whether it is still alive, what it printed
+at WARN or ERROR, and its memory at the start and the end.
 
     cargo build --release
     scripts/hammer.py --scene pile --seconds 180             # target/release/hooke
@@ -13,6 +14,8 @@ when the app died or printed a WARN or ERROR line of its own, 2 when it could no
 """
 
 import argparse
+import glob
+import importlib.util
 import os
 import random
 import subprocess
@@ -75,6 +78,16 @@ def main():
     if wid:
         x("windowfocus", wid[0])
     rng = random.Random(a.seed)
+    drops = []
+    if importlib.util.find_spec("Xlib"):
+        broken, picture = "/tmp/hammer-broken.ron", "/tmp/hammer-picture.png"
+        with open(broken, "w") as f:
+            f.write("(particles: [(pos: (0.5, 0.5)),")
+        with open(picture, "wb") as f:
+            f.write(b"\x89PNG")
+        drops = sorted(glob.glob(os.path.join(ROOT, "assets/scenes/*.ron"))) + [broken, picture]
+    else:
+        print("hammer: no python-xlib, so no files are dropped", file=sys.stderr)
     start_rss, events, end = rss_kb(app.pid), 0, time.time() + a.seconds
     while time.time() < end and app.poll() is None:
         kind = rng.random()
@@ -94,6 +107,12 @@ def main():
             x("mouseup", button)
         elif kind < 0.75:
             x("mousemove", str(px), str(py), "click", str(rng.choice([4, 5])))
+        elif kind < 0.77 and drops:
+            files = rng.sample(drops, rng.choice([1, 1, 1, 2]))
+            leave = ["--leave"] if rng.random() < 0.3 else []
+            subprocess.run([sys.executable, os.path.join(HERE, "drag_files.py"), "--hold",
+                            f"{rng.uniform(0.2, 1.0):.2f}", "--at", str(px), str(py), *leave,
+                            *files], env=env, capture_output=True, timeout=20)
         else:
             x("key", rng.choice(KEYS))
         for m in mods:

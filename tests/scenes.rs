@@ -566,6 +566,9 @@ fn a_spring_without_rest_is_at_rest_where_drawn() {
         saved.contains("rest: 0.25") && !saved.contains("rest: Some"),
         "{saved}"
     );
+    // And read bare by plain ron too (no implicit `Some`), as when the field was required.
+    let plain: hooke::scene::Scene = ron::from_str(&saved).unwrap();
+    assert_eq!(plain.springs[0].rest, Some(0.25));
 }
 
 #[test]

@@ -297,12 +297,13 @@ pub struct SpringDef {
     /// Stiffness, N/m; default 1e4.
     pub stiffness: f64,
     /// Rest length, m; left out, the distance between its ends where the scene places them (a
-    /// spring at rest as drawn; [`Scene::spring_defs`] gives it). Written bare (`rest: 0.1`),
-    /// as the scene files read it.
+    /// spring at rest as drawn; [`Scene::spring_defs`] gives it). Written and read bare
+    /// (`rest: 0.1`), as when it was required, whatever ron's options; `Some(0.1)` reads too.
     #[serde(
         default,
         skip_serializing_if = "Option::is_none",
-        serialize_with = "bare_number"
+        serialize_with = "bare_number",
+        deserialize_with = "bare_or_some_number"
     )]
     pub rest: Option<f64>,
     /// Its dashpot c, N·s/m; default: the scene's `spring_damping`.
@@ -316,13 +317,41 @@ pub struct SpringDef {
     pub plastic: Option<Plasticity>,
 }
 
-/// An optional number written as the number itself: the files read it so (ron's implicit
-/// `Some`), and `rest: 0.1` is what a person writes.
+/// An optional number written as the number itself: `rest: 0.1` is what a person writes.
 fn bare_number<S: serde::Serializer>(value: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
     match value {
         Some(v) => s.serialize_f64(*v),
         None => s.serialize_none(),
     }
+}
+
+/// An optional number read bare (`0.1`) or as `Some(0.1)`, with or without ron's implicit
+/// `Some`: text written when the field was a plain number reads the same, through
+/// [`super::ron_options`] or plain `ron::from_str`.
+fn bare_or_some_number<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    struct Number;
+    impl<'de> serde::de::Visitor<'de> for Number {
+        type Value = Option<f64>;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a number (m)")
+        }
+        fn visit_f64<E>(self, v: f64) -> Result<Self::Value, E> {
+            Ok(Some(v))
+        }
+        fn visit_i64<E>(self, v: i64) -> Result<Self::Value, E> {
+            Ok(Some(v as f64))
+        }
+        fn visit_u64<E>(self, v: u64) -> Result<Self::Value, E> {
+            Ok(Some(v as f64))
+        }
+        fn visit_none<E>(self) -> Result<Self::Value, E> {
+            Ok(None)
+        }
+        fn visit_some<D: serde::Deserializer<'de>>(self, d: D) -> Result<Self::Value, D::Error> {
+            f64::deserialize(d).map(Some)
+        }
+    }
+    d.deserialize_any(Number)
 }
 
 impl SpringDef {
