@@ -430,8 +430,14 @@ fn run(args: RunArgs) -> ExitCode {
         if let (Some(adapter), Some(precision)) = (&r.adapter, r.precision) {
             println!("on the GPU: {adapter}, {precision:?}");
         }
+        // A rise on the way (a large-step method's gain, a bounce) that the end hides: the peak.
+        let peak = if r.energy_max > r.energy_start + 1e-9 * r.energy_start.abs().max(1.0) {
+            format!(" (at most {} J)", number(r.energy_max, 6))
+        } else {
+            String::new()
+        };
         println!(
-            "wall {:.3} s: {:.0} steps/s, {:.2} M spring updates/s; energy {} J -> {} J",
+            "wall {:.3} s: {:.0} steps/s, {:.2} M spring updates/s; energy {} J -> {} J{peak}",
             r.wall_s,
             r.steps_per_s,
             r.spring_updates_per_s / 1e6,

@@ -440,6 +440,26 @@ fn the_summary_says_one_particle() {
     );
 }
 
+/// The summary names the energy's peak where it rose above the start, which the end can hide
+/// (the walker's muscles put in 5 J and friction takes it out again), and only there.
+#[test]
+fn the_summary_names_a_peak_the_end_hides() {
+    let o = hooke(&["run", "--scene", "walker", "--time", "1", "--json"]);
+    let r = json(&o);
+    let (start, peak) = (
+        r["energy_start"].as_f64().unwrap(),
+        r["energy_max"].as_f64().unwrap(),
+    );
+    assert!(peak > 2.0 * start, "{r}");
+    let o = hooke(&["run", "--scene", "walker", "--time", "1"]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains(&format!("(at most {peak:.6} J)")), "{text}");
+    // Damped and unforced, the rope only loses energy: nothing to name.
+    let o = hooke(&["run", "--scene", "rope", "--time", "1"]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(!text.contains("at most"), "{text}");
+}
+
 /// A `--time` shorter than half a step runs no step, and says so rather than passing unsaid.
 #[test]
 fn a_time_under_half_a_step_says_no_step_ran() {
