@@ -88,7 +88,7 @@ def main():
         drops = sorted(glob.glob(os.path.join(ROOT, "assets/scenes/*.ron"))) + [broken, picture]
     else:
         print("hammer: no python-xlib, so no files are dropped", file=sys.stderr)
-    start_rss, events, end = rss_kb(app.pid), 0, time.time() + a.seconds
+    start_rss, events, dragged, end = rss_kb(app.pid), 0, 0, time.time() + a.seconds
     while time.time() < end and app.poll() is None:
         kind = rng.random()
         px, py = rng.randint(0, 1279), rng.randint(0, 799)
@@ -113,6 +113,7 @@ def main():
             subprocess.run([sys.executable, os.path.join(HERE, "drag_files.py"), "--hold",
                             f"{rng.uniform(0.2, 1.0):.2f}", "--at", str(px), str(py), *leave,
                             *files], env=env, capture_output=True, timeout=20)
+            dragged += 1
         else:
             x("key", rng.choice(KEYS))
         for m in mods:
@@ -132,7 +133,7 @@ def main():
     lines = open("/tmp/hammer-app.log", errors="replace").read().splitlines()
     loud = [l for l in lines if ("WARN" in l or "ERROR" in l or "panicked" in l)]
     ours = [l for l in loud if not any(e in l for e in ENVIRONMENT)]
-    print(f"{events} events in {a.seconds:.0f} s on {a.scene}; alive: {alive}; "
+    print(f"{events} events ({dragged} file drags) in {a.seconds:.0f} s on {a.scene}; alive: {alive}; "
           f"RSS {start_rss} -> {end_rss} kB; WARN/ERROR lines: {len(ours)} ours, "
           f"{len(loud) - len(ours)} the environment's")
     for l in ours[:20]:
