@@ -363,6 +363,12 @@ fn a_slip_from_json_or_the_command_line_is_named_with_the_ron_for_it() {
             "write 1.0/3.0 as 0.3333333333333333",
         ),
         (
+            "gravity: (0.0, -9.8),",
+            "gravity: (0.0, -98/10),",
+            2,
+            "write -98/10 as -9.8",
+        ),
+        (
             "integrator: SymplecticEuler,",
             "integrator: \"Xpbd\",",
             5,

@@ -66,7 +66,8 @@ fn slip(code: &ron::Error, before: &str, after: &str) -> Option<String> {
                 Some(head) => (head.trim_end(), after),
                 None => (before.trim_end(), after.strip_prefix('/')?.trim_start()),
             };
-            let number = |c: char| c.is_ascii_digit() || matches!(c, '.' | 'e' | 'E' | '_');
+            let number =
+                |c: char| c.is_ascii_digit() || matches!(c, '.' | 'e' | 'E' | '_' | '-' | '+');
             let p = &head[head.trim_end_matches(number).len()..];
             let q = &tail[..tail.len() - tail.trim_start_matches(number).len()];
             let value = p.parse::<f64>().ok()? / q.parse::<f64>().ok()?;
