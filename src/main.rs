@@ -475,8 +475,14 @@ fn run(args: RunArgs) -> ExitCode {
         }
     }
     if !r.finite {
+        // The card's state comes back every 1000 steps: the blow-up is found there.
+        let found = if r.device == runner::Device::Gpu {
+            ", where the card's state came back (a run on the CPU finds the exact step)"
+        } else {
+            ""
+        };
         eprintln!(
-            "hooke: the simulation blew up (a non-finite state or energy) at step {}",
+            "hooke: the simulation blew up (a non-finite state or energy) at step {}{found}",
             r.blowup_step.map_or("?".into(), |s| s.to_string())
         );
         // The likeliest cause a newcomer meets: a step past what the method can take.

@@ -903,6 +903,28 @@ fn run_on_the_gpu_reports_the_adapter_or_why_not() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(json(&o).get("pass_seconds").is_none());
     assert!(stderr(&o).contains("--profile"), "{}", stderr(&o));
+    // A blow-up on the card is found where its state comes back, and the message says so.
+    let o = hooke(&[
+        "run",
+        "--scene",
+        "rope",
+        "--integrator",
+        "explicit-euler",
+        "--dt",
+        "1/60",
+        "--time",
+        "5",
+        "--device",
+        "gpu",
+        "--json",
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert_eq!(json(&o)["finite"], false);
+    assert!(
+        stderr(&o).contains("at step 300, where the card's state came back"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 /// `hooke bench gpu` prints each figure as it measures it, so that a run on a lent card that
