@@ -444,6 +444,10 @@ fn run(args: RunArgs) -> ExitCode {
             number(r.energy_start, 6),
             number(r.energy_end, 6)
         );
+        // XPBD's soft springs: what the panel's amber line says (the energy is counted at k).
+        if let Some(line) = hooke::readable::xpbd_softness(&r.solve) {
+            println!("{line}");
+        }
         if r.springs_torn > 0 {
             let torn = plural(r.springs_torn, "spring", "springs");
             println!("{torn} tore");
@@ -487,7 +491,7 @@ fn run(args: RunArgs) -> ExitCode {
         );
         // The likeliest cause a newcomer meets: a step past what the method can take.
         if let Some(stable) = r.stable_dt.filter(|&s| r.dt > s) {
-            let any_step: Vec<_> = Integrator::ALL
+            let any_step: Vec<&str> = Integrator::ALL
                 .iter()
                 .filter(|i| i.unconditionally_stable())
                 .map(|i| i.cli_name())
@@ -507,7 +511,7 @@ fn run(args: RunArgs) -> ExitCode {
             };
             eprintln!(
                 "hooke: {past} an --integrator stable at any step ({})",
-                any_step.join(", ")
+                hooke::readable::list(&any_step)
             );
         }
         return ExitCode::from(BLEW_UP);

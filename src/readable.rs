@@ -115,6 +115,22 @@ pub fn list<S: AsRef<str>>(items: &[S]) -> String {
     }
 }
 
+/// XPBD's convergence after the last step, when its springs are softer than k says (they
+/// carry under 95 % of its force): the largest constraint error and the share of k's force they
+/// carry. The panel's amber line and `hooke run`'s summary; the energy, counted at k, then
+/// overstates what such springs hold.
+pub fn xpbd_softness(stats: &crate::solver::SolveStats) -> Option<String> {
+    let carried = stats.xpbd_force_carried?;
+    let error = stats.xpbd_constraint_error.unwrap_or(0.0);
+    (carried < 0.95).then(|| {
+        format!(
+            "XPBD: constraint error {error:.1e} of L; its springs carry {:.0} % of the force k \
+             asks, so the cloth is softer than its stiffness (more sweeps or a tolerance fix it)",
+            100.0 * carried
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::{duration, number, seconds};

@@ -457,7 +457,7 @@ pub fn side_panel(
             let particles = solver.particle_count();
             accuracy_readout(ui, p.integrator, p.dt, particles, p.contact);
             if p.integrator == Integrator::Xpbd
-                && let Some(line) = xpbd_softness(&solver.solve_stats())
+                && let Some(line) = crate::readable::xpbd_softness(&solver.solve_stats())
             {
                 ui.colored_label(AMBER, line);
             }
@@ -588,20 +588,6 @@ fn iteration_rows(ui: &mut egui::Ui, integrator: Integrator, it: &mut Iterations
         }
         _ => {}
     }
-}
-
-/// XPBD's convergence after the last step, when its springs are softer than k says: the
-/// largest constraint error and the share of k's force they carry.
-fn xpbd_softness(stats: &crate::sim::SolveStats) -> Option<String> {
-    let carried = stats.xpbd_force_carried?;
-    let error = stats.xpbd_constraint_error.unwrap_or(0.0);
-    (carried < 0.95).then(|| {
-        format!(
-            "XPBD: constraint error {error:.1e} of L; its springs carry {:.0} % of the force k \
-             asks, so the cloth is softer than its stiffness (more sweeps or a tolerance fix it)",
-            100.0 * carried
-        )
-    })
 }
 
 /// The CPU/GPU switch: steps on the graphics card when it runs the scene (the state carries
