@@ -189,23 +189,26 @@ fn a_blow_up_stops_the_run_with_exit_code_3() {
     );
 }
 
+/// The rope under explicit Euler at a frame's step, 330 times its stable step: it blows up at
+/// its 299th step while its state stays finite.
+const ROPE_PAST_ITS_STABLE_STEP: &[&str] = &[
+    "run",
+    "--scene",
+    "rope",
+    "--integrator",
+    "explicit-euler",
+    "--dt",
+    "1/60",
+    "--time",
+    "5",
+];
+
 /// A state can stay finite while its energy overflows (speeds past 1e154 m/s): the rope under
 /// explicit Euler at a frame's step reached positions of 1e151 m and ended "finite" with exit
 /// 0. It is a blow-up, and the message names the stable step it passed.
 #[test]
 fn an_overflowing_energy_is_a_blow_up() {
-    let o = hooke(&[
-        "run",
-        "--scene",
-        "rope",
-        "--integrator",
-        "explicit-euler",
-        "--dt",
-        "1/60",
-        "--time",
-        "5",
-        "--json",
-    ]);
+    let o = hooke(&[ROPE_PAST_ITS_STABLE_STEP, &["--json"]].concat());
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     let r = json(&o);
     assert_eq!(r["finite"], false);
@@ -936,20 +939,7 @@ fn run_on_the_gpu_reports_the_adapter_or_why_not() {
     assert!(json(&o).get("pass_seconds").is_none());
     assert!(stderr(&o).contains("--profile"), "{}", stderr(&o));
     // A blow-up on the card is found where its state comes back, and the message says so.
-    let o = hooke(&[
-        "run",
-        "--scene",
-        "rope",
-        "--integrator",
-        "explicit-euler",
-        "--dt",
-        "1/60",
-        "--time",
-        "5",
-        "--device",
-        "gpu",
-        "--json",
-    ]);
+    let o = hooke(&[ROPE_PAST_ITS_STABLE_STEP, &["--device", "gpu", "--json"]].concat());
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     assert_eq!(json(&o)["finite"], false);
     assert!(
