@@ -947,6 +947,27 @@ fn run_on_the_gpu_reports_the_adapter_or_why_not() {
         "{}",
         stderr(&o)
     );
+    // In f64 the card's state is still finite at step 300, its energy not: a blow-up there as
+    // on the CPU (it ended "finite", exit 0, before the card's read took the energy's word).
+    let o = hooke(
+        &[
+            ROPE_PAST_ITS_STABLE_STEP,
+            &["--device", "gpu", "--gpu-precision", "f64", "--json"],
+        ]
+        .concat(),
+    );
+    let j = json(&o);
+    if j["device"] == "gpu" && j["precision"] == "f64" {
+        assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+        assert_eq!(j["finite"], false);
+        assert!(
+            stderr(&o).contains("at step 300, where the card's state came back"),
+            "{}",
+            stderr(&o)
+        );
+    } else {
+        println!("skipped the card in f64: {}", stderr(&o));
+    }
 }
 
 /// `hooke bench gpu` prints each figure as it measures it, so that a run on a lent card that

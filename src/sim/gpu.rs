@@ -130,13 +130,16 @@ fn take_state(world: &mut World, card: &GpuStep, torn: &mut Vec<usize>) -> Resul
         pairs: card.pair_contacts(),
         ..Default::default()
     };
-    let clock = *world.resource::<SimClock>();
-    let solver = world.resource::<Solver>();
-    let finite = !solver.non_finite;
     if world.contains_resource::<EnergyPeak>() {
-        let energy = solver.energy(world.resource::<SimParams>().gravity).total();
-        world.resource_mut::<EnergyPeak>().note(energy);
+        let gravity = world.resource::<SimParams>().gravity;
+        let energy = world.resource::<Solver>().energy(gravity).total();
+        if !world.resource_mut::<EnergyPeak>().note(energy) {
+            // As on the CPU: an energy past the floats is a blow-up, the state finite or not.
+            world.resource_mut::<Solver>().non_finite = true;
+        }
     }
+    let clock = *world.resource::<SimClock>();
+    let finite = !world.resource::<Solver>().non_finite;
     if !finite {
         *world.resource_mut::<SimStatus>() = SimStatus::BlewUp {
             step: clock.steps,

@@ -58,9 +58,15 @@ pub struct EnergyPeak {
 }
 
 impl EnergyPeak {
-    /// Takes the total energy `e` at the end of a step into the peak.
-    pub fn note(&mut self, e: f64) {
-        self.max = Some(self.max.map_or(e, |m| m.max(e)));
+    /// Takes the total energy `e` at the end of a step into the peak, and answers whether it
+    /// could: an energy that is not finite is no figure to keep, and the state it came from has
+    /// blown up even where that state is still finite (speeds past 1e154 m/s), so its callers,
+    /// on the CPU and on the card, refuse the step as they refuse a NaN.
+    pub fn note(&mut self, e: f64) -> bool {
+        if e.is_finite() {
+            self.max = Some(self.max.map_or(e, |m| m.max(e)));
+        }
+        e.is_finite()
     }
 }
 
@@ -77,9 +83,7 @@ pub(crate) fn track_energy_peak(
 ) {
     let clock = std::time::Instant::now();
     let e = solver.energy_now(params.gravity, &threads).total();
-    if e.is_finite() {
-        peak.note(e);
-    } else {
+    if !peak.note(e) {
         solver.non_finite = true;
     }
     peak.seconds += clock.elapsed().as_secs_f64();
