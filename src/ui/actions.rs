@@ -97,6 +97,10 @@ pub fn open(world: &mut World, scene: &LoadedScene) {
     replace_scene(world, "load", scene);
 }
 
+/// What a refused file is told, after its name: the drop's hint and the open's notice say it
+/// alike.
+pub const OPENS_SCENE_FILES: &str = "hooke opens scene files (.ron)";
+
 /// Whether `path` names a scene file by its extension, `.ron` in any case: what a drop or an
 /// open looks at before reading it.
 pub fn is_scene_file(path: &Path) -> bool {
@@ -110,7 +114,7 @@ pub fn is_scene_file(path: &Path) -> bool {
 pub fn open_file(world: &mut World, path: &Path) {
     let refused = if !is_scene_file(path) {
         Some(format!(
-            "{} is not a scene: hooke opens scene files (.ron)",
+            "{} is not a scene: {OPENS_SCENE_FILES}",
             path.display()
         ))
     } else {
@@ -198,59 +202,6 @@ mod tests {
         assert!(!unsaved(world), "back at the first load");
         reset(world);
         assert!(!unsaved(world), "a reset over nothing unsaved");
-    }
-
-    /// A scene file dropped on the window opens (undo takes it back); a file of another kind, or
-    /// a broken scene, changes nothing and the panel says why.
-    #[test]
-    fn a_dropped_scene_file_opens() {
-        use bevy::window::FileDragAndDrop;
-        let dir = std::env::temp_dir().join(format!("hooke-drop-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let good = dir.join("three.ron");
-        std::fs::write(
-            &good,
-            "(particles: [(pos: (0.2, 0.5)), (pos: (0.4, 0.5)), (pos: (0.6, 0.5))])",
-        )
-        .unwrap();
-        let picture = dir.join("cloth.png");
-        std::fs::write(&picture, [0x89, b'P', b'N', b'G']).unwrap();
-        let broken = dir.join("broken.ron");
-        std::fs::write(&broken, "(particles: [(pos: (0.5, 0.5)),").unwrap();
-
-        let mut app = crate::headless_app();
-        app.init_resource::<History>()
-            .init_resource::<super::super::drop::FilesOver>()
-            .add_message::<FileDragAndDrop>()
-            .add_systems(Update, super::super::drop::follow_file_drags);
-        open(app.world_mut(), &presets::resolve("rope").unwrap());
-        let particles = |app: &mut App| {
-            let w = app.world_mut();
-            w.query::<&crate::sim::Particle>().iter(w).count()
-        };
-        let rope = particles(&mut app);
-        let drop = |app: &mut App, path: &Path| {
-            app.world_mut().write_message(FileDragAndDrop::DroppedFile {
-                window: Entity::PLACEHOLDER,
-                path_buf: path.to_owned(),
-            });
-            app.update();
-            app.world().resource::<Notice>().0.clone().unwrap()
-        };
-        for (path, needle) in [
-            (&picture, "is not a scene: hooke opens scene files (.ron)"),
-            (&broken, "broken.ron:1:"),
-        ] {
-            let (text, is_error) = drop(&mut app, path);
-            assert!(is_error && text.contains(needle), "{text}");
-            assert!(text.ends_with("The scene on screen is unchanged."));
-            assert_eq!(particles(&mut app), rope);
-        }
-        let (text, is_error) = drop(&mut app, &good);
-        assert!(!is_error && text.contains("opened"), "{text}");
-        assert_eq!(particles(&mut app), 3);
-        history::undo(app.world_mut());
-        assert_eq!(particles(&mut app), rope, "undo takes the drop back");
     }
 
     /// R reads a scene's file again: a change made in an editor shows, undo takes it back, and a

@@ -47,8 +47,9 @@ pub fn what_a_drop_does(files: &[PathBuf]) -> (String, bool) {
         ([one], Some(_)) => (format!("Drop to open {}", name(one)), false),
         ([one], None) => (
             format!(
-                "{} is not a scene: hooke opens scene files (.ron)",
-                name(one)
+                "{} is not a scene: {}",
+                name(one),
+                actions::OPENS_SCENE_FILES
             ),
             true,
         ),
@@ -62,8 +63,9 @@ pub fn what_a_drop_does(files: &[PathBuf]) -> (String, bool) {
         ),
         (_, None) => (
             format!(
-                "None of these {} files is a scene: hooke opens scene files (.ron)",
-                files.len()
+                "None of these {} files is a scene: {}",
+                files.len(),
+                actions::OPENS_SCENE_FILES
             ),
             true,
         ),
@@ -130,6 +132,16 @@ mod tests {
         }
     }
 
+    /// A headless app that follows drags and opens what is dropped, with an undo history.
+    fn following_drags() -> App {
+        let mut app = crate::headless_app();
+        app.init_resource::<super::super::history::History>()
+            .init_resource::<FilesOver>()
+            .add_message::<FileDragAndDrop>()
+            .add_systems(Update, follow_file_drags);
+        app
+    }
+
     /// Hovering fills the list, a cancel or a drop empties it, and a drop opens the file.
     #[test]
     fn a_drag_is_followed_and_a_drop_opens() {
@@ -142,11 +154,7 @@ mod tests {
         )
         .unwrap();
 
-        let mut app = crate::headless_app();
-        app.init_resource::<super::super::history::History>()
-            .init_resource::<FilesOver>()
-            .add_message::<FileDragAndDrop>()
-            .add_systems(Update, follow_file_drags);
+        let mut app = following_drags();
         let window = Entity::PLACEHOLDER;
         let send = |app: &mut App, m: FileDragAndDrop| {
             app.world_mut().write_message(m);
@@ -168,5 +176,56 @@ mod tests {
         assert!(send(&mut app, dropped).is_empty());
         let w = app.world_mut();
         assert_eq!(w.query::<&crate::sim::Particle>().iter(w).count(), 2);
+    }
+
+    /// A scene file dropped on the window opens (undo takes it back); a file of another kind, or
+    /// a broken scene, changes nothing and the panel says why.
+    #[test]
+    fn a_dropped_scene_file_opens() {
+        let dir = std::env::temp_dir().join(format!("hooke-drop-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let good = dir.join("three.ron");
+        std::fs::write(
+            &good,
+            "(particles: [(pos: (0.2, 0.5)), (pos: (0.4, 0.5)), (pos: (0.6, 0.5))])",
+        )
+        .unwrap();
+        let picture = dir.join("cloth.png");
+        std::fs::write(&picture, [0x89, b'P', b'N', b'G']).unwrap();
+        let broken = dir.join("broken.ron");
+        std::fs::write(&broken, "(particles: [(pos: (0.5, 0.5)),").unwrap();
+
+        let mut app = following_drags();
+        actions::open(
+            app.world_mut(),
+            &crate::scene::presets::resolve("rope").unwrap(),
+        );
+        let particles = |app: &mut App| {
+            let w = app.world_mut();
+            w.query::<&crate::sim::Particle>().iter(w).count()
+        };
+        let rope = particles(&mut app);
+        let drop = |app: &mut App, path: &Path| {
+            app.world_mut().write_message(FileDragAndDrop::DroppedFile {
+                window: Entity::PLACEHOLDER,
+                path_buf: path.to_owned(),
+            });
+            app.update();
+            app.world().resource::<actions::Notice>().0.clone().unwrap()
+        };
+        for (path, needle) in [
+            (&picture, "is not a scene: hooke opens scene files (.ron)"),
+            (&broken, "broken.ron:1:"),
+        ] {
+            let (text, is_error) = drop(&mut app, path);
+            assert!(is_error && text.contains(needle), "{text}");
+            assert!(text.ends_with("The scene on screen is unchanged."));
+            assert_eq!(particles(&mut app), rope);
+        }
+        let (text, is_error) = drop(&mut app, &good);
+        assert!(!is_error && text.contains("opened"), "{text}");
+        assert_eq!(particles(&mut app), 3);
+        super::super::history::undo(app.world_mut());
+        assert_eq!(particles(&mut app), rope, "undo takes the drop back");
     }
 }
