@@ -101,11 +101,12 @@ pub fn names() -> Vec<&'static str> {
 pub fn resolve(name_or_path: &str) -> Result<LoadedScene, SceneError> {
     let path = Path::new(name_or_path);
     if !path.exists() {
-        let builtin = BUILTIN.iter().find(|(n, _)| {
-            *n == name_or_path || path == Path::new(&format!("assets/scenes/{n}.ron"))
-        });
+        let shipped = |name: &str| PathBuf::from(format!("assets/scenes/{name}.ron"));
+        let builtin = BUILTIN
+            .iter()
+            .find(|(n, _)| *n == name_or_path || path == shipped(n));
         if let Some((name, text)) = builtin {
-            return LoadedScene::parse(text, &PathBuf::from(format!("assets/scenes/{name}.ron")));
+            return LoadedScene::parse(text, &shipped(name));
         }
         if let Some((shipped, text)) = REPORT_SCENES.iter().find(|(p, _)| Path::new(p) == path) {
             return LoadedScene::parse(text, Path::new(shipped));
