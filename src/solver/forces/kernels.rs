@@ -85,9 +85,9 @@ pub(crate) fn one_spring_energy(s: &PackedSpring, x: &[DVec2]) -> f64 {
 /// [`spring_energy`]'s eight running sums and the springs past the last eight, added in one
 /// order for both of its forms.
 #[inline(always)]
-pub(crate) fn energy_total(sums: [f64; 8], rest: &[PackedSpring], x: &[DVec2]) -> f64 {
+pub(crate) fn energy_total(sums: [f64; 8], tail: &[PackedSpring], x: &[DVec2]) -> f64 {
     let s: [f64; 4] = std::array::from_fn(|i| sums[i] + sums[i + 4]);
-    let tail: f64 = rest.iter().map(|s| one_spring_energy(s, x)).sum();
+    let tail: f64 = tail.iter().map(|s| one_spring_energy(s, x)).sum();
     ((s[0] + s[1]) + (s[2] + s[3])) + tail
 }
 
