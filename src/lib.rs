@@ -1,4 +1,5 @@
 #![warn(missing_docs)]
+#![doc(test(attr(deny(warnings))))]
 //! hooke: an interactive 2D mass-spring simulator on Bevy.
 //!
 //! # Quick start
@@ -8,7 +9,6 @@
 //!
 //! ```
 //! use bevy::math::DVec2;
-//! use bevy::prelude::*;
 //! use hooke::sim::{Particle, Pinned, Position, SimParams, Solver, Spring, advance};
 //!
 //! let mut app = hooke::headless_app();

@@ -22,10 +22,21 @@ use std::time::{Duration, Instant};
 ///
 /// ```
 /// # use bevy::prelude::*;
-/// # use hooke::sim::{PhysicsSystems, Solver};
-/// fn log_energy(solver: Res<Solver>) { /* read the state of the tick just taken */ }
-/// let mut app = hooke::headless_app();
-/// app.add_systems(FixedUpdate, log_energy.after(PhysicsSystems::Writeback));
+/// # use hooke::sim::{PhysicsSystems, Solver, advance};
+/// #[derive(Resource, Default)]
+/// struct Lowest(f64);
+///
+/// // Reads the state of the tick just taken.
+/// fn lowest_point(solver: Res<Solver>, mut lowest: ResMut<Lowest>) {
+///     lowest.0 = solver.x().iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+/// }
+///
+/// let rope = hooke::scene::presets::resolve("rope").unwrap();
+/// let mut app = hooke::running_app(&rope).unwrap();
+/// app.init_resource::<Lowest>();
+/// app.add_systems(FixedUpdate, lowest_point.after(PhysicsSystems::Writeback));
+/// advance(app.world_mut(), 1000);
+/// assert!(app.world().resource::<Lowest>().0 > 0.0); // above the ground
 /// ```
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum PhysicsSystems {
@@ -56,14 +67,25 @@ pub struct PhysicsStep;
 ///
 /// ```
 /// # use bevy::prelude::*;
-/// # use hooke::sim::{PhysicsStep, StepSystems, Solver};
-/// // A system that sees every step's forces before the integrator uses them.
-/// fn inspect(solver: Res<Solver>) {}
-/// let mut app = hooke::headless_app();
+/// # use hooke::sim::{PhysicsStep, Solver, StepSystems, advance};
+/// #[derive(Resource, Default)]
+/// struct LargestForce(f64);
+///
+/// // Sees every step's forces before the integrator uses them.
+/// fn largest_force(solver: Res<Solver>, mut largest: ResMut<LargestForce>) {
+///     let now = solver.f().iter().map(|f| f.length()).fold(0.0, f64::max);
+///     largest.0 = largest.0.max(now);
+/// }
+///
+/// let rope = hooke::scene::presets::resolve("rope").unwrap();
+/// let mut app = hooke::running_app(&rope).unwrap();
+/// app.init_resource::<LargestForce>();
 /// app.add_systems(
 ///     PhysicsStep,
-///     inspect.after(StepSystems::Forces).before(StepSystems::Integrate),
+///     largest_force.after(StepSystems::Forces).before(StepSystems::Integrate),
 /// );
+/// advance(app.world_mut(), 100);
+/// assert!(app.world().resource::<LargestForce>().0 > 0.0);
 /// ```
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum StepSystems {

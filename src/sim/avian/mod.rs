@@ -62,7 +62,6 @@ pub enum AvianSystems {
 ///
 /// ```
 /// use avian2d::prelude::*;
-/// use bevy::prelude::*;
 /// let mut app = hooke::headless_app();
 /// app.add_plugins((
 ///     PhysicsPlugins::default(),
