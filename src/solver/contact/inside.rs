@@ -65,15 +65,20 @@ impl<'a> InSolve<'a> {
     /// The contact of a step of `dt` with `around`'s surfaces, and with particle pairs through
     /// `pairs` when they are readied ([`Pairs::ready_for_step`]). `None` when there is nothing
     /// to keep out of: a scene without contact runs exactly what it ran before.
+    ///
+    /// `bare_ground`: the ground is kept out of even without contact settings (the methods
+    /// whose solve the step's own clamp cannot reach: [`crate::solver::step::integrate`]).
     pub(crate) fn new(
         around: &Surroundings<'a>,
         pairs: Option<&'a Pairs>,
         outlines: Option<&'a Outlines>,
         heading: &'a [DVec2],
         dt: f64,
+        bare_ground: bool,
     ) -> Option<Self> {
-        // Without settings, obstacles still hold points, frictionless; the ground is then the
-        // step's own clamp's.
+        // Without settings, obstacles still hold points, frictionless, and so does the ground
+        // where `bare_ground` asks (a point on a frictionless floor, as the clamp holds it);
+        // otherwise the ground is then the step's own clamp's.
         let settings = around.settings.unwrap_or_default();
         let radius = settings.radius;
         let pairs = pairs
@@ -84,7 +89,9 @@ impl<'a> InSolve<'a> {
                 .filter(|o| o.candidates() > 0)
                 .map(|o| (o, contact))
         });
-        let ground = around.settings.and(around.ground);
+        let ground = around
+            .ground
+            .filter(|_| bare_ground || around.settings.is_some());
         let obstacles = around.obstacles;
         if obstacles.is_empty() && ground.is_none() && pairs.is_none() && outlines.is_none() {
             return None;
@@ -107,6 +114,22 @@ impl<'a> InSolve<'a> {
         InSolve {
             outlines: None,
             ..*self
+        }
+    }
+
+    /// Whether this contact could act on any particle of `x`: always, but for the ground
+    /// alone, which acts only on a particle under its height plus the radius. A solve whose
+    /// iterate nothing reaches can leave the contact's bookkeeping aside ([`Support`]), since
+    /// holding that iterate would move nothing. (A pinned particle under the ground answers
+    /// yes, and is then left alone as the contact leaves every pinned particle.)
+    pub(crate) fn reaches(&self, x: &[DVec2]) -> bool {
+        let only_ground = self.obstacles.is_empty() && !self.has_pairs();
+        match self.ground {
+            Some(g) if only_ground => {
+                let top = g + self.radius;
+                x.iter().any(|x| x.y < top)
+            }
+            _ => true,
         }
     }
 
@@ -406,6 +429,11 @@ impl Support {
         } = self;
         c.project(x, from, w, scratch, |i, x, held| {
             let push = x - before[i];
+            if push == DVec2::ZERO && held.is_none() && force[i] == DVec2::ZERO {
+                // Neither touching nor held: nothing to learn, and nothing read until a push
+                // writes it all (most of a cloth above the ground, at every iteration).
+                return;
+            }
             // The surface's normal, or a pair's push when no surface touched the particle.
             if let Some(n) = held.map(|h| h.normal).or_else(|| push.try_normalize()) {
                 normal[i] = n;

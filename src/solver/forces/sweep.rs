@@ -41,10 +41,18 @@ impl Contact {
 
     /// The contact rule on one particle: a free one whose tested height is below the ground is
     /// put on it and its vertical velocity zeroed (what the ground pass,
-    /// [`crate::solver::step::ground`], and the particle sweep both do).
+    /// [`crate::solver::step::ground`], and the particle sweep both do). Tested at the step's
+    /// end, one that ends on the ground heading into it loses that velocity too: the solves
+    /// that hold their iterate out of the ground leave a particle on it with a downward
+    /// velocity of round-off (−1e-15 m/s, from a start one rounding above it).
     #[inline(always)]
     pub fn apply(self, x: &mut DVec2, v: &mut DVec2, w: f64, ground: f64) {
-        if w != 0.0 && self.height(*x, *v) < ground {
+        if w == 0.0 {
+            return;
+        }
+        let height = self.height(*x, *v);
+        let into = matches!(self, Contact::End { .. }) && height == ground && v.y < 0.0;
+        if height < ground || into {
             x.y = ground;
             v.y = 0.0;
         }

@@ -362,7 +362,13 @@ pub unsafe fn particle_sweep<const MOTION: u8, const DAMP: bool, const GROUND: b
                     Contact::End { dt } => _mm256_add_pd(xv, _mm256_mul_pd(vv, _mm256_set1_pd(dt))),
                 };
                 let free = _mm256_cmp_pd::<_CMP_NEQ_UQ>(w, zero);
-                let below = _mm256_cmp_pd::<_CMP_LT_OQ>(height, groundv);
+                let mut below = _mm256_cmp_pd::<_CMP_LT_OQ>(height, groundv);
+                if let Contact::End { .. } = contact {
+                    // Ending on the ground heading into it ([`Contact::apply`]).
+                    let on = _mm256_cmp_pd::<_CMP_EQ_OQ>(height, groundv);
+                    let into = _mm256_cmp_pd::<_CMP_LT_OQ>(vv, zero);
+                    below = _mm256_or_pd(below, _mm256_and_pd(on, into));
+                }
                 let hit = _mm256_and_pd(_mm256_and_pd(free, below), y_lanes);
                 xv = _mm256_blendv_pd(xv, groundv, hit);
                 vv = _mm256_blendv_pd(vv, zero, hit);
@@ -525,7 +531,8 @@ mod tests {
 
     /// The AVX particle sweep and the portable one give the same x and v bits and the same
     /// finiteness answer, for every combination of motion, damping and ground: particles above,
-    /// on and under the ground (at the start and, for the end-of-step test, at the end),
+    /// on and under the ground (at the start and, for the end-of-step test, at the end, one
+    /// heading into it),
     /// pinned ones, a negative zero, an infinite and a NaN velocity, and an odd count.
     #[test]
     fn sweep_two_at_a_time_gives_the_portable_bits() {
@@ -535,13 +542,15 @@ mod tests {
         use crate::solver::forces::sweep::sweep_portable;
         let n = 41;
         let start = |bad: bool| {
-            let x: Vec<DVec2> = (0..n)
+            let mut x: Vec<DVec2> = (0..n)
                 .map(|i| DVec2::new(0.002 * (20.0 - i as f64), 0.003 * (i as f64 - 20.0)))
                 .collect();
             let mut v: Vec<DVec2> = (0..n)
                 .map(|i| DVec2::new((i as f64 * 0.7).sin(), (i as f64 * 1.3).cos() * 3.0))
                 .collect();
             v[5].y = -0.0;
+            // On the ground at the end of the step, heading into it by round-off.
+            (x[8].y, v[8].y) = (0.001, -1e-20);
             if bad {
                 v[11].x = f64::INFINITY;
                 v[30].y = f64::NAN;

@@ -26,7 +26,7 @@
 //!
 //! The step leaves v₁ in v and the drift (x₁ − x₀)/h that the position update moves with.
 //! The ground clamps the end positions inside the step (as XPBD's substeps do): a free
-//! particle whose x₁ is under it is put on it and loses its downward velocity.
+//! particle whose x₁ is on or under it is put on it and loses its vertical velocity.
 
 use super::projective::{Projective, Target};
 use crate::solver::contact::inside::InSolve;
@@ -189,7 +189,9 @@ pub fn step(
             let mut end = z[i];
             v[i] = (end - xh[i]) * inv_hat;
             (ex[i], ev[i]) = (end, v[i]);
-            if end.y < floor {
+            // On the ground too: the solve holds a landing particle on it (`InSolve`), where
+            // BDF2's own velocity, from its history, points up at half the landing speed.
+            if end.y <= floor {
                 end.y = floor;
                 v[i].y = 0.0;
             }
