@@ -344,9 +344,10 @@ fn a_missing_field_is_named_with_its_place() {
     }
 }
 
-/// The slips of someone who writes JSON, or the command line's fractions, are named with what
-/// RON wants, at their line, in place of ron's own words ("Unexpected char '6'", "Expected
-/// opening `(`", "Expected identifier").
+/// The slips of someone who writes JSON, or the command line's fractions and hyphens, are named
+/// with what RON wants, at their line, in place of ron's own words ("Unexpected char '6'",
+/// "Expected opening `(`", "Expected identifier", "try the raw identifier
+/// `r#projective-dynamics`").
 #[test]
 fn a_slip_from_json_or_the_command_line_is_named_with_the_ron_for_it() {
     for (from, to, line, says) in [
@@ -391,6 +392,18 @@ fn a_slip_from_json_or_the_command_line_is_named_with_the_ron_for_it() {
             "springs: (",
             11,
             "a list is written in brackets: [ … ], not ( … )",
+        ),
+        (
+            "integrator: SymplecticEuler,",
+            "integrator: projective-dynamics,",
+            5,
+            "a name has no hyphens: `ProjectiveDynamics`, not `projective-dynamics`",
+        ),
+        (
+            "dt: 0.0001,",
+            "spring-damping: 2.0, dt: 0.0001,",
+            6,
+            "a field's name has no hyphens: `spring_damping`, not `spring-damping`",
         ),
     ] {
         let msg = parse(&scene_text(|s| s.replacen(from, to, 1)))

@@ -50,9 +50,28 @@ fn around(text: &str, line: usize, col: usize) -> (&str, &str) {
 /// the error's first character that is not a space):
 /// - a quoted name where a name is wanted (`integrator: "Xpbd"`, as in JSON);
 /// - a fraction (`dt: 1/60`, which the command line takes): RON reads `/` as a comment;
-/// - brackets for a pair or a struct (`gravity: [0.0, -9.8]`), parentheses for a list.
+/// - brackets for a pair or a struct (`gravity: [0.0, -9.8]`), parentheses for a list;
+/// - the command line's hyphens (`integrator: projective-dynamics`, `spring-damping: 2.0`),
+///   for which ron suggests a raw identifier, `r#projective-dynamics`, that no scene knows.
 fn slip(code: &ron::Error, before: &str, after: &str) -> Option<String> {
     match code {
+        ron::Error::SuggestRawIdentifier(name) if name.contains('-') => {
+            let field = (after.strip_prefix(name.as_str()))
+                .is_some_and(|rest| rest.trim_start().starts_with(':'));
+            Some(if field {
+                let snake = name.replace('-', "_");
+                format!("a field's name has no hyphens: `{snake}`, not `{name}`")
+            } else {
+                let camel: String = name.split('-').map(capitalised).collect();
+                let integrators = crate::solver::Integrator::ALL;
+                let cli = if integrators.iter().any(|m| m.cli_name() == name) {
+                    " (the command line's spelling)"
+                } else {
+                    ""
+                };
+                format!("a name has no hyphens: `{camel}`, not `{name}`{cli}")
+            })
+        }
         ron::Error::ExpectedIdentifier => {
             let quoted = after.strip_prefix('"')?;
             let name = &quoted[..quoted.find('"')?];
@@ -90,6 +109,14 @@ fn slip(code: &ron::Error, before: &str, after: &str) -> Option<String> {
             .then(|| "a list is written in brackets: [ … ], not ( … )".to_string()),
         _ => None,
     }
+}
+
+/// `word` with its first letter in capitals: `projective` → `Projective`.
+fn capitalised(word: &str) -> String {
+    let mut chars = word.chars();
+    chars.next().map_or_else(String::new, |first| {
+        first.to_uppercase().chain(chars).collect()
+    })
 }
 
 fn unknown(kind: &str, found: &str, expected: &[&str], outer: Option<&str>) -> String {
