@@ -363,6 +363,30 @@ fn bad_flags() {
     }
 }
 
+/// A scene file's name for an integrator (`ProjectiveDynamics`, as one copied from a scene)
+/// runs that integrator, as its command-line name does.
+#[test]
+fn the_integrator_by_its_scene_file_name() {
+    for (scene_name, cli_name) in [
+        ("ProjectiveDynamics", "projective-dynamics"),
+        ("Xpbd", "xpbd"),
+        ("SymplecticEuler", "symplectic-euler"),
+    ] {
+        let o = hooke(&[
+            "run",
+            "--scene",
+            "rope",
+            "--integrator",
+            scene_name,
+            "--steps",
+            "10",
+            "--json",
+        ]);
+        assert!(o.status.success(), "{scene_name}: {}", stderr(&o));
+        assert_eq!(json(&o)["integrator"], cli_name);
+    }
+}
+
 /// `--out` names a file the run could not write (no such folder, or a folder): refused before
 /// the run, not after it, when the run's result would be lost. The run asked for here is
 /// 1e9 steps of cloth32 (hours), so a check after it would not end within the test.

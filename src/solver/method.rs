@@ -5,37 +5,49 @@ use serde::{Deserialize, Serialize};
 /// The time integrators. Every one is followed by the same damping and ground passes (see
 /// `docs/integrators.md`), except that BDF2 takes the damping inside its solve (and projective
 /// dynamics and VBD when `drag_in_solve` is set).
+///
+/// The command line names them in kebab case (`projective-dynamics`) and takes a scene file's
+/// name too (`ProjectiveDynamics`), so that one copied from a scene works there.
 #[derive(
     Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize, clap::ValueEnum,
 )]
 pub enum Integrator {
     /// x uses the velocity at the start of the step.
+    #[value(alias = "ExplicitEuler")]
     ExplicitEuler,
     /// x uses the velocity at the end of the step (symplectic; the assignment's default).
     #[default]
+    #[value(alias = "SymplecticEuler")]
     SymplecticEuler,
     /// Kick-drift-kick velocity Verlet (symplectic, second order).
+    #[value(alias = "VelocityVerlet")]
     VelocityVerlet,
     /// Classic four-stage Runge-Kutta on x'' = f(x)/m (fourth order, not symplectic).
+    #[value(alias = "Rk4")]
     Rk4,
     /// Backward Euler by Newton's method, each step solved by conjugate gradients (first
     /// order, dissipative). Newton steps per step (`iterations.newton`; the default 1 is
     /// the classic linearised step).
+    #[value(alias = "ImplicitEuler")]
     ImplicitEuler,
     /// Projective dynamics (Liu et al. 2013): local/global iterations on the backward Euler
     /// objective, the constant global matrix factored once by sparse Cholesky
     /// (`iterations.projective` per step).
+    #[value(alias = "ProjectiveDynamics")]
     ProjectiveDynamics,
     /// XPBD (Macklin et al. 2016): springs as compliant distance constraints (α = 1/k),
     /// `iterations.xpbd_substeps` substeps of `iterations.xpbd_sweeps` Gauss-Seidel
     /// sweeps each (or sweeps until the constraint error is under `iterations.xpbd_tolerance`).
+    #[value(alias = "Xpbd")]
     Xpbd,
     /// BDF2, second-order backward differentiation, solved by projective dynamics'
     /// local/global iterations with its factor kept (`iterations.bdf2` per step); the air drag
     /// inside the solve. Second order, dissipative; a backward Euler step starts it.
+    #[value(alias = "Bdf2")]
     Bdf2,
     /// Vertex block descent (Chen et al. 2024) on the backward Euler objective: per vertex a
     /// 2×2 Newton step, colour by colour (`iterations.vbd` per step). No factorisation.
+    #[value(alias = "Vbd")]
     Vbd,
 }
 
