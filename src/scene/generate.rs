@@ -33,8 +33,7 @@ impl Scene {
     /// The scene's gas-filled loops: its `pressure` entries, then each ring's with gas.
     pub fn pressure_defs(&self) -> Vec<PressureDef> {
         let mut out = self.pressure.clone();
-        let mut base = self.particles.len();
-        for g in &self.generate {
+        for (g, base) in self.generators_at() {
             if let Generator::Ring {
                 segments, pressure, ..
             } = *g
@@ -45,7 +44,6 @@ impl Scene {
                     nrt: pressure,
                 });
             }
-            base += g.counts().0;
         }
         out
     }
@@ -81,20 +79,25 @@ impl Scene {
         )
     }
 
+    /// Each generator with the index of its first particle: after the explicit particles and
+    /// the generators before it.
+    fn generators_at(&self) -> impl Iterator<Item = (&Generator, usize)> + '_ {
+        self.generate.iter().scan(self.particles.len(), |base, g| {
+            let at = *base;
+            *base += g.counts().0;
+            Some((g, at))
+        })
+    }
+
     /// Where the scene places particle `i` (explicit or generated), if there is one.
     pub fn position(&self, i: usize) -> Option<(f64, f64)> {
         if let Some(p) = self.particles.get(i) {
             return Some(p.pos);
         }
-        let mut base = self.particles.len();
-        for g in &self.generate {
-            let n = g.counts().0;
-            if i < base + n {
-                return Some(g.position(i - base));
-            }
-            base += n;
-        }
-        None
+        let (g, base) = self
+            .generators_at()
+            .find(|(g, base)| i < base + g.counts().0)?;
+        Some(g.position(i - base))
     }
 
     /// The explicit springs, then each generator's (by particle index, rest at the initial
@@ -108,15 +111,8 @@ impl Scene {
             }),
             ..*s
         });
-        let bases = self.generate.iter().scan(self.particles.len(), |base, g| {
-            let at = *base;
-            *base += g.counts().0;
-            Some(at)
-        });
         let generated = self
-            .generate
-            .iter()
-            .zip(bases)
+            .generators_at()
             .flat_map(|(g, base)| g.spring_defs(base));
         Exact::new(explicit.chain(generated), self.counts().1)
     }

@@ -142,6 +142,12 @@ mod tests {
         app
     }
 
+    /// The particles in `app`'s world.
+    fn particles(app: &mut App) -> usize {
+        let w = app.world_mut();
+        w.query::<&crate::sim::Particle>().iter(w).count()
+    }
+
     /// Hovering fills the list, a cancel or a drop empties it, and a drop opens the file.
     #[test]
     fn a_drag_is_followed_and_a_drop_opens() {
@@ -174,8 +180,7 @@ mod tests {
             path_buf: scene,
         };
         assert!(send(&mut app, dropped).is_empty());
-        let w = app.world_mut();
-        assert_eq!(w.query::<&crate::sim::Particle>().iter(w).count(), 2);
+        assert_eq!(particles(&mut app), 2);
     }
 
     /// A scene file dropped on the window opens (undo takes it back); a file of another kind, or
@@ -200,10 +205,6 @@ mod tests {
             app.world_mut(),
             &crate::scene::presets::resolve("rope").unwrap(),
         );
-        let particles = |app: &mut App| {
-            let w = app.world_mut();
-            w.query::<&crate::sim::Particle>().iter(w).count()
-        };
         let rope = particles(&mut app);
         let drop = |app: &mut App, path: &Path| {
             app.world_mut().write_message(FileDragAndDrop::DroppedFile {
