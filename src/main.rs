@@ -273,6 +273,9 @@ fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(e) => e.exit(),
     };
+    if cli.command.is_some() {
+        end_quietly_on_a_closed_pipe();
+    }
     match cli.command {
         None => open_app(cli.app),
         Some(Command::Run(args)) => run(args),
@@ -319,6 +322,18 @@ fn quiet_device_select() {
     {
         // SAFETY: the process has one thread here (the first statement of `main`).
         unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
+    }
+}
+
+/// The command line's output into a pipe whose reader has gone (`hooke run .. --json | head
+/// -c 100`) ends the process as it ends `cat`'s, quietly. Rust starts with SIGPIPE ignored, so
+/// the next `println!` met the closed pipe as an error and panicked with a backtrace. Only for
+/// `run` and `bench`: the app writes to no pipe of the user's.
+fn end_quietly_on_a_closed_pipe() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: restoring a signal's default action; no handler of ours is involved.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
 

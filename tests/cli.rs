@@ -1163,3 +1163,37 @@ fn the_app_without_a_display_says_so() {
         );
     }
 }
+
+/// Output into a pipe whose reader has gone (`hooke run .. | head -1`) ends the run as it ends
+/// `cat`, quietly: it printed "failed printing to stdout: Broken pipe" with a panic's
+/// backtrace. The summary and the CSV on standard output, the reader closed before either.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_closed_pipe_ends_the_run_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    use std::process::Stdio;
+    for args in [
+        &["run", "--scene", "rope", "--time", "0.1", "--json"][..],
+        &[
+            "run",
+            "--scene",
+            "cloth32",
+            "--time",
+            "0.01",
+            "--out",
+            "/dev/stdout",
+        ],
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_hooke"))
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take());
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.is_empty(), "{args:?}: {err}");
+        assert_eq!(out.status.signal(), Some(13), "{args:?}: {:?}", out.status);
+    }
+}
