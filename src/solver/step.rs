@@ -408,7 +408,8 @@ pub fn ready_outlines(s: &State, w: &mut Workspace, dt: f64, around: &Surroundin
     if let Some(contact) = around.outlines() {
         let fastest = s.v.iter().fold(0.0f64, |m, v| m.max(v.length()));
         let closing = 2.0 * (fastest * dt + strongest(s) * dt * dt);
-        w.outlines.ready(s, 1.5 * contact + 2.0 * closing);
+        let reach = 1.5 * contact + 2.0 * closing;
+        w.outlines.ready(s, reach, around.obstacles);
     }
 }
 
@@ -489,8 +490,9 @@ pub fn collide(
         Some(contact) => {
             let surface = around.surface(dt, gravity);
             let follows = integrator.unconditionally_stable().then_some(dt);
+            let obstacles = (around.obstacles, around.reactions);
             w.outlines
-                .collide(s, contact, surface, follows, OUTLINE_PASSES)
+                .collide(s, contact, surface, follows, OUTLINE_PASSES, obstacles)
         }
         None => 0,
     };

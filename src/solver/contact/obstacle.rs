@@ -373,6 +373,26 @@ impl Placed {
         }
     }
 
+    /// The points where the shape could pass between two of a body's particles, each with
+    /// the radius of the round it carries, in the world: a box's or polygon's corners (0), a
+    /// segment's ends (its thickness), a circle's centre (its radius). Contact by outlines
+    /// keeps them out of the bodies' outline edges ([`super::outline`]); a particle's own
+    /// test ([`Self::touch`]) keeps only the particles out.
+    pub(crate) fn corners(&self, out: &mut Vec<(DVec2, f64)>) {
+        let at = |q: DVec2| self.pose.center + self.world_direction(q);
+        match self.shape.for_contact() {
+            Shape::Circle { radius } => out.push((self.pose.center, radius)),
+            Shape::Box { half } => out.extend(
+                [(1.0, 1.0), (-1.0, 1.0), (-1.0, -1.0), (1.0, -1.0)]
+                    .map(|(x, y)| (at(half * DVec2::new(x, y)), 0.0)),
+            ),
+            Shape::Segment { a, b, thickness } => {
+                out.extend([(at(a), thickness), (at(b), thickness)]);
+            }
+            Shape::Polygon(p) => out.extend(p.corners().iter().map(|&c| (at(c), 0.0))),
+        }
+    }
+
     /// The velocity of the obstacle's material at the world point `p`.
     pub fn velocity_at(&self, p: DVec2) -> DVec2 {
         let arm = p - self.pose.center;

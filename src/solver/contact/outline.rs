@@ -26,8 +26,19 @@
 //! of other bodies within the contact distance plus how far the two can close in the step,
 //! through a grid of cells at least one edge long, with each edge in every cell its reach
 //! covers.
+//!
+//! **Obstacles' corners.** A particle's own test keeps it out of an obstacle, but not the
+//! springs between particles: a slope's end or a box's corner passed between two of a ball's
+//! particles, 26 mm apart, and the ball hung on it, pierced (the shipped `balloon` scene,
+//! rolling off its slope). So each obstacle's corners ([`Placed::corners`]: a box's, a segment's
+//! ends, a circle's centre, each with the radius of its round) are candidates as a particle is,
+//! one that nothing moves, and are kept the corner's radius plus r from every outline edge,
+//! on the side they start on. They act after the step (pass 6), for every method: the edge's
+//! two ends take the whole push and the velocity pass, and an obstacle that stands for a body
+//! takes back the impulse ([`Reactions`]).
 
-use super::obstacle::{SLOP, Surface, respond};
+use super::obstacle::{Placed, SLOP, Surface, respond};
+use super::reaction::Reactions;
 use crate::solver::state::State;
 use glam::DVec2;
 
@@ -43,6 +54,14 @@ struct Near {
     start: (f64, f64),
 }
 
+/// An obstacle's corner, where it stands for the step: the point, and the radius of its round.
+#[derive(Debug, Clone, Copy)]
+struct Corner {
+    obstacle: u32,
+    at: DVec2,
+    radius: f64,
+}
+
 /// The outlines of a state's bodies and the step's candidates, kept from step to step.
 #[derive(Debug, Default)]
 pub struct Outlines {
@@ -56,6 +75,12 @@ pub struct Outlines {
     built: Option<(usize, u64)>,
     /// The step's candidates.
     near: Vec<Near>,
+    /// The obstacles' corners this step.
+    corners: Vec<Corner>,
+    /// The step's corner candidates: [`Near::particle`] is the corner's index in `corners`.
+    near_corners: Vec<Near>,
+    /// Scratch for one obstacle's corners.
+    found: Vec<(DVec2, f64)>,
     /// The broad phase's (cell, edge) keys, sorted.
     cells: Vec<(u64, u32)>,
     /// Steps the candidates were listed for.
@@ -88,15 +113,17 @@ impl Outlines {
         &self.edges
     }
 
-    /// Candidates listed this step.
+    /// Particle candidates listed this step.
     pub fn candidates(&self) -> usize {
         self.near.len()
     }
 
     /// Lists the step's candidates: pairs of a particle and another body's outline edge
-    /// closer than `reach` at the start of the step (the state's positions). Finds the
-    /// outline again when the spring graph changed. Returns whether any pair was listed.
-    pub(crate) fn ready(&mut self, s: &State, reach: f64) -> bool {
+    /// closer than `reach` at the start of the step (the state's positions), and pairs of an
+    /// obstacle's corner and an outline edge closer than `reach` plus the corner's radius.
+    /// Finds the outline again when the spring graph changed. Returns whether any pair was
+    /// listed.
+    pub(crate) fn ready(&mut self, s: &State, reach: f64, obstacles: &[Placed]) -> bool {
         let key = (s.x.len(), s.revision);
         if self.built != Some(key) {
             self.find(s);
@@ -104,6 +131,8 @@ impl Outlines {
         }
         self.steps += 1;
         self.near.clear();
+        self.near_corners.clear();
+        self.corners.clear();
         if self.edges.is_empty() || reach <= 0.0 {
             return false;
         }
@@ -136,44 +165,108 @@ impl Outlines {
                 if c != k {
                     break;
                 }
-                let [a, b] = self.edges[e as usize];
+                let [a, _] = self.edges[e as usize];
                 if self.body[a as usize] == self.body[p] {
                     continue;
                 }
-                let (pa, pb) = (x[a as usize], x[b as usize]);
-                let (t, q) = closest(pa, pb, xp);
-                if (xp - q).length_squared() >= reach * reach {
-                    continue;
+                if let Some(n) = self.candidate(x, e, p as u32, xp, reach) {
+                    self.near.push(n);
                 }
-                // Another body's particle belongs outside it; where both sides are outside,
-                // on the side it starts on. One behind the edge's span at the start is not
-                // this edge's: inside the body already, or beyond it.
-                let start = if (pb - pa).perp_dot(xp - pa) >= 0.0 {
-                    1.0
-                } else {
-                    -1.0
-                };
-                let side = match self.outward[e as usize] {
-                    0.0 => start,
-                    outward if start != outward && t > 0.0 && t < 1.0 => continue,
-                    outward => outward,
-                };
-                self.near.push(Near {
-                    particle: p as u32,
-                    edge: e,
-                    side,
-                    start: frame(pa, pb, side, xp),
-                });
             }
         }
-        !self.near.is_empty()
+        self.ready_corners(x, reach, cell, obstacles);
+        !self.near.is_empty() || !self.near_corners.is_empty()
     }
 
-    /// The contact of candidate `n` at positions `x` and distance `contact`, if it touches.
-    fn touch(&self, n: &Near, x: &[DVec2], contact: f64) -> Option<Touch> {
+    /// Lists the obstacles' corners and their candidates, through the cells of [`Self::ready`]
+    /// (`cell` wide, each edge in every cell within `reach` of it).
+    fn ready_corners(&mut self, x: &[DVec2], reach: f64, cell: f64, obstacles: &[Placed]) {
+        let at = |p: DVec2| ((p.x / cell).floor() as i64, (p.y / cell).floor() as i64);
+        let key_of = |(i, j): (i64, i64)| ((i as u64) << 32) ^ (j as u64 & 0xffff_ffff);
+        let (mut found, mut corners, mut near) = (
+            std::mem::take(&mut self.found),
+            std::mem::take(&mut self.corners),
+            std::mem::take(&mut self.near_corners),
+        );
+        for (o, obstacle) in obstacles.iter().enumerate() {
+            found.clear();
+            obstacle.corners(&mut found);
+            for &(point, radius) in found.iter().filter(|(p, _)| p.is_finite()) {
+                let corner = corners.len() as u32;
+                corners.push(Corner {
+                    obstacle: o as u32,
+                    at: point,
+                    radius,
+                });
+                let within = radius + reach;
+                let first = near.len();
+                let lo = at(point - DVec2::splat(radius));
+                let hi = at(point + DVec2::splat(radius));
+                let cells = (hi.0 - lo.0 + 1).saturating_mul(hi.1 - lo.1 + 1);
+                if cells as usize > self.edges.len() {
+                    // A round wider than the outlines' cells (a large disc): every edge.
+                    near.extend(
+                        (0..self.edges.len() as u32)
+                            .filter_map(|e| self.candidate(x, e, corner, point, within)),
+                    );
+                    continue;
+                }
+                for i in lo.0..=hi.0 {
+                    for j in lo.1..=hi.1 {
+                        let k = key_of((i, j));
+                        let from = self.cells.partition_point(|&(c, _)| c < k);
+                        let here = self.cells[from..].iter().take_while(|&&(c, _)| c == k);
+                        near.extend(
+                            here.filter_map(|&(_, e)| self.candidate(x, e, corner, point, within)),
+                        );
+                    }
+                }
+                // An edge in several of the corner's cells was found once in each.
+                let mut listed = near.split_off(first);
+                listed.sort_unstable_by_key(|n| n.edge);
+                listed.dedup_by_key(|n| n.edge);
+                near.append(&mut listed);
+            }
+        }
+        (self.found, self.corners, self.near_corners) = (found, corners, near);
+    }
+
+    /// The candidate of the point `xp` (particle or corner `who`) and edge `e`, if it is
+    /// within `reach` of the edge at the start of the step. Another body's particle, or an
+    /// obstacle, belongs outside the body; where both sides are outside (a rope), on the side
+    /// it starts on. One behind the edge's span at the start is not this edge's: inside the
+    /// body already, or beyond it.
+    fn candidate(&self, x: &[DVec2], e: u32, who: u32, xp: DVec2, reach: f64) -> Option<Near> {
+        let [a, b] = self.edges[e as usize];
+        let (pa, pb) = (x[a as usize], x[b as usize]);
+        let (t, q) = closest(pa, pb, xp);
+        if (xp - q).length_squared() >= reach * reach {
+            return None;
+        }
+        let start = if (pb - pa).perp_dot(xp - pa) >= 0.0 {
+            1.0
+        } else {
+            -1.0
+        };
+        let side = match self.outward[e as usize] {
+            0.0 => start,
+            outward if start != outward && t > 0.0 && t < 1.0 => return None,
+            outward => outward,
+        };
+        Some(Near {
+            particle: who,
+            edge: e,
+            side,
+            start: frame(pa, pb, side, xp),
+        })
+    }
+
+    /// The contact of candidate `n`, its point at `xp`, with the edge at positions `x` and
+    /// distance `contact`, if it touches.
+    fn touch(&self, n: &Near, xp: DVec2, x: &[DVec2], contact: f64) -> Option<Touch> {
         let [a, b] = self.edges[n.edge as usize];
         let (p, a, b) = (n.particle as usize, a as usize, b as usize);
-        let (pa, pb, xp) = (x[a], x[b], x[p]);
+        let (pa, pb) = (x[a], x[b]);
         let (t, q) = closest(pa, pb, xp);
         let ab = pb - pa;
         let d = xp - q;
@@ -230,7 +323,7 @@ impl Outlines {
     ) -> OutlineReport {
         let mut report = OutlineReport::default();
         for n in &self.near {
-            let Some(c) = self.touch(n, x, contact) else {
+            let Some(c) = self.touch(n, x[n.particle as usize], x, contact) else {
                 continue;
             };
             report.contacts += 1;
@@ -256,9 +349,62 @@ impl Outlines {
         report
     }
 
+    /// The contact of corner candidate `n` with its edge at positions `x`, for particles of
+    /// radius `r`, if it touches (`slop` farther counts too): the corner is the candidate's
+    /// point, and the contact distance its radius plus r.
+    fn touch_corner(&self, n: &Near, x: &[DVec2], r: f64, slop: f64) -> Option<(Touch, Corner)> {
+        let corner = self.corners[n.particle as usize];
+        let contact = corner.radius + r + slop;
+        self.touch(n, corner.at, x, contact).map(|c| (c, corner))
+    }
+
+    /// One Gauss–Seidel pass pushing every outline edge that an obstacle's corner touches
+    /// out to the corner's radius plus `r`, its ends taking the whole push by their
+    /// inverse-mass shares (the corner does not move). With `velocity: Some((v, dt))` each
+    /// push over dt is added to the velocity too, and noted in `reactions` as the ends'
+    /// impulse where the obstacle stands for a body.
+    fn push_corners(
+        &self,
+        x: &mut [DVec2],
+        w: &[f64],
+        r: f64,
+        mut velocity: Option<(&mut [DVec2], f64)>,
+        reactions: Option<&Reactions>,
+    ) -> OutlineReport {
+        let mut report = OutlineReport::default();
+        for n in &self.near_corners {
+            let Some((c, corner)) = self.touch_corner(n, x, r, 0.0) else {
+                continue;
+            };
+            report.contacts += 1;
+            report.deepest = report.deepest.max(c.depth);
+            let (sa, sb) = (1.0 - c.t, c.t);
+            let wsum = sa * sa * w[c.a] + sb * sb * w[c.b];
+            if wsum == 0.0 {
+                continue;
+            }
+            let lambda = c.depth / wsum;
+            for (i, share) in [(c.a, sa), (c.b, sb)] {
+                let d = -c.normal * (share * w[i] * lambda);
+                x[i] += d;
+                if let Some((v, dt)) = velocity.as_mut() {
+                    let approach = v[i].dot(c.normal);
+                    v[i] += d / *dt;
+                    if let Some(log) = reactions.filter(|_| w[i] > 0.0) {
+                        let on = d / (*dt * w[i]);
+                        log.note(corner.obstacle as usize, i, corner.at, on, approach);
+                    }
+                }
+            }
+        }
+        report
+    }
+
     /// Pushes the candidates apart in the state's positions until the deepest is under 1 % of
-    /// `contact` (at most `passes` passes), then the velocity pass. `velocity_follows: Some(dt)`
-    /// adds the push over dt to the velocities. Returns the contacts of the first pass.
+    /// `contact` (at most `passes` passes), then the velocity pass; the obstacles' corners
+    /// (at `obstacles`, the same as at [`Self::ready`]) the same way, their impulses noted in
+    /// `reactions`. `velocity_follows: Some(dt)` adds the push over dt to the velocities.
+    /// Returns the contacts of the first pass.
     pub(crate) fn collide(
         &self,
         s: &mut State,
@@ -266,21 +412,74 @@ impl Outlines {
         surface: Surface,
         velocity_follows: Option<f64>,
         passes: usize,
+        (obstacles, reactions): (&[Placed], Option<&Reactions>),
     ) -> usize {
-        if self.near.is_empty() {
+        if self.near.is_empty() && self.near_corners.is_empty() {
             return 0;
         }
+        let r = 0.5 * contact;
         let mut first = None;
         for _ in 0..passes {
             let velocity = velocity_follows.map(|dt| (&mut s.v[..], dt));
-            let r = self.push_apart(&mut s.x, &s.inv_mass, contact, velocity);
-            first.get_or_insert(r.contacts);
-            if r.deepest <= 0.01 * contact {
+            let p = self.push_apart(&mut s.x, &s.inv_mass, contact, velocity);
+            let velocity = velocity_follows.map(|dt| (&mut s.v[..], dt));
+            let c = self.push_corners(&mut s.x, &s.inv_mass, r, velocity, reactions);
+            first.get_or_insert(p.contacts + c.contacts);
+            if p.deepest.max(c.deepest) <= 0.01 * contact {
                 break;
             }
         }
         self.respond(s, contact, surface);
+        self.respond_corners(s, r, surface, obstacles, reactions);
         first.unwrap_or(0)
+    }
+
+    /// The velocity pass of the corners: each touching edge point's velocity relative to the
+    /// obstacle's material there through [`respond`], the impulse shared by the ends' inverse
+    /// masses and noted in `reactions`.
+    fn respond_corners(
+        &self,
+        s: &mut State,
+        r: f64,
+        surface: Surface,
+        obstacles: &[Placed],
+        reactions: Option<&Reactions>,
+    ) {
+        let (x, v, w) = (&s.x, &mut s.v, &s.inv_mass);
+        for n in &self.near_corners {
+            let Some((c, corner)) = self.touch_corner(n, x, r, SLOP) else {
+                continue;
+            };
+            let (sa, sb) = (1.0 - c.t, c.t);
+            let wsum = sa * sa * w[c.a] + sb * sb * w[c.b];
+            let Some(obstacle) = obstacles.get(corner.obstacle as usize) else {
+                continue;
+            };
+            if wsum == 0.0 {
+                continue;
+            }
+            // The edge's point against the obstacle's surface, whose normal points from the
+            // corner to the edge.
+            let rel = v[c.a] * sa + v[c.b] * sb - obstacle.velocity_at(corner.at);
+            let change = respond(rel, DVec2::ZERO, -c.normal, surface) - rel;
+            if change == DVec2::ZERO {
+                continue;
+            }
+            let impulse = change / wsum;
+            for (i, share) in [(c.a, sa), (c.b, sb)] {
+                v[i] += impulse * (share * w[i]);
+                if let Some(log) = reactions.filter(|_| w[i] > 0.0) {
+                    let approach = rel.dot(c.normal);
+                    log.note(
+                        corner.obstacle as usize,
+                        i,
+                        corner.at,
+                        impulse * share,
+                        approach,
+                    );
+                }
+            }
+        }
     }
 
     /// The velocity pass: each touching candidate's relative velocity (the particle's against
@@ -288,7 +487,7 @@ impl Outlines {
     fn respond(&self, s: &mut State, contact: f64, surface: Surface) {
         let (x, v, w) = (&s.x, &mut s.v, &s.inv_mass);
         for n in &self.near {
-            let Some(c) = self.touch(n, x, contact + SLOP) else {
+            let Some(c) = self.touch(n, x[n.particle as usize], x, contact + SLOP) else {
                 continue;
             };
             let (sa, sb) = (1.0 - c.t, c.t);
@@ -502,17 +701,52 @@ mod tests {
     fn the_outline_is_the_sides_not_the_diagonal() {
         let s = square_and_particle(DVec2::new(0.5, 1.5));
         let mut o = Outlines::default();
-        o.ready(&s, 0.1);
+        o.ready(&s, 0.1, &[]);
         let mut edges = o.edges().to_vec();
         edges.sort();
         assert_eq!(edges, vec![[0, 1], [0, 3], [1, 2], [2, 3]]);
     }
 
     #[test]
+    fn an_obstacles_corner_between_a_sides_ends_pushes_the_side_out() {
+        use crate::solver::contact::obstacle::Shape;
+        // A box standing on its corner, its top corner 1 mm under the square's bottom side.
+        let centre_to_corner = std::f64::consts::SQRT_2 * 0.1;
+        let spike = Placed::at(
+            Shape::Box {
+                half: DVec2::splat(0.1),
+            },
+            DVec2::new(0.5, -0.001 - centre_to_corner),
+            std::f64::consts::FRAC_PI_4,
+        );
+        let mut s = square_and_particle(DVec2::new(3.0, 3.0));
+        let mut o = Outlines::default();
+        assert!(o.ready(&s, 0.1, &[spike]));
+        assert_eq!(
+            o.near_corners.len(),
+            1,
+            "the top corner, against the bottom side"
+        );
+        // An iterate that carried the square 0.05 down onto it: the corner between the bottom
+        // side's ends, 0.049 inside.
+        for x in &mut s.x[..4] {
+            x.y -= 0.05;
+        }
+        let w = s.inv_mass.clone();
+        let r = o.push_corners(&mut s.x, &w, 0.01, None, None);
+        assert_eq!(r.contacts, 1);
+        assert!((r.deepest - 0.059).abs() < 1e-9, "{r:?}");
+        // The side's ends took the whole push, half each: the side is r above the corner.
+        let bottom = (s.x[0].y + s.x[1].y) / 2.0;
+        assert!((bottom - (-0.001 + 0.01)).abs() < 1e-9, "{:?}", s.x);
+        assert_eq!(s.x[4], DVec2::new(3.0, 3.0));
+    }
+
+    #[test]
     fn a_particle_carried_through_an_edge_goes_back_to_its_side() {
         let mut s = square_and_particle(DVec2::new(0.5, 1.02));
         let mut o = Outlines::default();
-        assert!(o.ready(&s, 0.1));
+        assert!(o.ready(&s, 0.1, &[]));
         // An iterate that carried it 0.1 below the top side, into the square.
         s.x[4] = DVec2::new(0.5, 0.92);
         let w = s.inv_mass.clone();
