@@ -427,8 +427,12 @@ fn run(args: RunArgs) -> ExitCode {
     } else {
         let plural =
             |n: u64, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
+        let bodies = match r.bodies.len() {
+            0 => String::new(),
+            n => format!(", {}", plural(n as u64, "rigid body", "rigid bodies")),
+        };
         println!(
-            "{}: {}, {}, {} x {} of {} s = {} s simulated",
+            "{}: {}, {}{bodies}, {} x {} of {} s = {} s simulated",
             r.scene,
             plural(r.particles as u64, "particle", "particles"),
             plural(r.springs as u64, "spring", "springs"),

@@ -244,6 +244,10 @@ pub struct RunReport {
     /// `--out`) is then the last finite one, at the end of the tick before.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub blowup_step: Option<u64>,
+    /// The rigid bodies where the run left them, as a scene writes them (shape at its pose,
+    /// mass, velocity, spin, fixed); absent in a scene without them.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub bodies: Vec<crate::scene::BodyDef>,
 }
 
 /// A finished run: the report and the world, to read the final state from.
@@ -377,6 +381,7 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
     // The step's own time: the energy peak's evaluations are kept apart.
     let peak = *world.resource::<sim::watch::EnergyPeak>();
     let wall_s = (start.elapsed().as_secs_f64() - peak.seconds).max(0.0);
+    let bodies = crate::scene::bodies::body_defs(world);
 
     let solver = world.resource::<Solver>();
     let solve = solver.solve_stats();
@@ -434,6 +439,7 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
         precision: on.precision,
         device_note: on.note,
         blowup_step,
+        bodies,
     };
     Ok(Run { report, app })
 }

@@ -1197,3 +1197,36 @@ fn a_closed_pipe_ends_the_run_quietly() {
         assert_eq!(out.status.signal(), Some(13), "{args:?}: {:?}", out.status);
     }
 }
+
+/// A scene with rigid bodies reports them: the summary counts them, and the JSON gives each
+/// where the run left it, as a scene writes it (the three crates fell from where they start
+/// into the net, the fixed ground body stayed); a scene without them has no `bodies`.
+#[cfg(feature = "avian")]
+#[test]
+fn a_run_reports_its_rigid_bodies() {
+    let o = hooke(&["run", "--scene", "crates", "--time", "2"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("221 springs, 4 rigid bodies, xpbd"), "{out}");
+    let j = json(&hooke(&[
+        "run", "--scene", "crates", "--time", "2", "--json",
+    ]));
+    let bodies = j["bodies"].as_array().expect("a bodies array");
+    assert_eq!(bodies.len(), 4, "{bodies:?}");
+    let height = |b: &serde_json::Value| {
+        let (_, shape) = b["shape"].as_object().unwrap().iter().next().unwrap();
+        shape["center"][1].as_f64().unwrap()
+    };
+    // The scene's crates start at 0.6, 0.7 and 0.6 m; the net hangs at 0.4 m.
+    for (b, start) in bodies.iter().zip([0.6, 0.7, 0.6]) {
+        let y = height(b);
+        assert!(y < start - 0.1 && y > 0.3, "{b}");
+        assert!(b.get("fixed").is_none(), "{b}");
+    }
+    assert_eq!(bodies[3]["fixed"], true, "{}", bodies[3]);
+    assert_eq!(height(&bodies[3]), 0.05f32 as f64);
+    let rope = json(&hooke(&[
+        "run", "--scene", "rope", "--time", "0.1", "--json",
+    ]));
+    assert!(rope.get("bodies").is_none(), "{rope}");
+}
