@@ -446,6 +446,47 @@ fn bad_dt() {
     assert!(msg.contains("dt: must be at most 1e9 s"), "{msg}");
 }
 
+/// A grid whose corners are swapped or equal in x or y, and a chain whose ends are one point,
+/// are refused by name: they loaded as a mirrored grid (its pinned top row at the bottom) or as
+/// particles piled on each other.
+#[test]
+fn generators_that_span_nothing() {
+    let grid = |min: &str, max: &str| {
+        invalid(|s| {
+            s.replace(
+                "particles: [",
+                &format!(
+                    "generate: [Grid(cols: 3, rows: 3, min: {min}, max: {max})],\n    particles: ["
+                ),
+            )
+        })
+    };
+    for (min, max) in [
+        ("(0.4, 0.4)", "(0.2, 0.2)"),
+        ("(0.2, 0.4)", "(0.4, 0.2)"),
+        ("(0.2, 0.2)", "(0.2, 0.4)"),
+        ("(0.2, 0.2)", "(0.2, 0.2)"),
+    ] {
+        let msg = grid(min, max);
+        assert!(
+            msg.contains(&format!(
+                "generate[0]: min {min} must lie below and left of max {max}"
+            )),
+            "{min} {max}: {msg}"
+        );
+    }
+    let msg = invalid(|s| {
+        s.replace(
+            "particles: [",
+            "generate: [Chain(from: (0.1, 0.5), to: (0.1, 0.5), segments: 4)],\n    particles: [",
+        )
+    });
+    assert!(
+        msg.contains("generate[0]: a chain needs two different ends, not from = to = (0.1, 0.5)"),
+        "{msg}"
+    );
+}
+
 #[test]
 fn negative_stiffness() {
     let msg = invalid(|s| s.replace("stiffness: 10000.0", "stiffness: -5.0"));

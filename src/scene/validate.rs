@@ -108,6 +108,13 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
                 }
                 if !(finite2(min) && finite2(max) && finite2(vel)) {
                     p.push(format!("{at}: min, max and vel must be finite"));
+                } else if !(min.0 < max.0 && min.1 < max.1) {
+                    // Swapped corners mirror the grid (its top row, which `pin` names, at the
+                    // bottom); equal ones pile its particles on each other.
+                    p.push(format!(
+                        "{at}: min {min:?} must lie below and left of max {max:?} (min is the \
+                         lower-left corner, max the upper-right)"
+                    ));
                 }
                 check_mass(&mut p, &at, mass);
                 check_stiffness(&mut p, &at, stiffness);
@@ -125,6 +132,10 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
                 }
                 if !(finite2(from) && finite2(to)) {
                     p.push(format!("{at}: from and to must be finite"));
+                } else if from == to {
+                    p.push(format!(
+                        "{at}: a chain needs two different ends, not from = to = {from:?}"
+                    ));
                 }
                 check_mass(&mut p, &at, mass);
                 check_stiffness(&mut p, &at, stiffness);
