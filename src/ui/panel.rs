@@ -391,9 +391,10 @@ pub fn side_panel(
                     let c = p.contact.as_mut().unwrap_or(&mut state.contact);
                     let hover = "particles collide with each other, in one body and between \
                                  bodies (not those joined by a spring)";
-                    let outline = "each particle is kept out of other bodies' outlines (their \
-                                   boundary springs, as capsules of the radius), so that \
-                                   sparse bodies cannot pass into each other";
+                    let outline = "each particle, and each obstacle's corner, is kept out of \
+                                   other bodies' outlines (their boundary springs, as capsules \
+                                   of the radius), so that sparse bodies cannot pass into each \
+                                   other nor hang pierced on a corner";
                     let changed = ui
                         .horizontal(|ui| {
                             let pairs = ui.checkbox(&mut c.particles, "pairs collide");

@@ -30,7 +30,7 @@
 //! **Obstacles' corners.** A particle's own test keeps it out of an obstacle, but not the
 //! springs between particles: a slope's end or a box's corner passed between two of a ball's
 //! particles, 26 mm apart, and the ball hung on it, pierced (the shipped `balloon` scene,
-//! rolling off its slope). So each obstacle's corners ([`Placed::corners`]: a box's, a segment's
+//! rolling off its slope). So each obstacle's corners (`Placed::corners`: a box's, a segment's
 //! ends, a circle's centre, each with the radius of its round) are candidates as a particle is,
 //! one that nothing moves, and are kept the corner's radius plus r from every outline edge,
 //! on the side they start on. They act after the step (pass 6), for every method: the edge's
