@@ -127,6 +127,20 @@ fn body_velocity(app: &App, body: Entity) -> DVec2 {
         .as_dvec2()
 }
 
+/// Every integrator at a step it is made for (the explicit ones small, the large-step ones at
+/// 1/120 s) and the frames that make 0.8 s of it.
+const EACH_METHOD_FOR_0_8_S: [(Integrator, f64, usize); 9] = [
+    (Integrator::SymplecticEuler, 1e-4, 8000),
+    (Integrator::ExplicitEuler, 1e-5, 80000),
+    (Integrator::VelocityVerlet, 1e-4, 8000),
+    (Integrator::Rk4, 1e-4, 8000),
+    (Integrator::Xpbd, 1.0 / 120.0, 96),
+    (Integrator::ImplicitEuler, 1.0 / 120.0, 96),
+    (Integrator::ProjectiveDynamics, 1.0 / 120.0, 96),
+    (Integrator::Bdf2, 1.0 / 120.0, 96),
+    (Integrator::Vbd, 1.0 / 120.0, 96),
+];
+
 /// A 1 kg soft ball, and a 1 kg particle, hit a 1 kg box head-on with gravity off: the
 /// momentum is kept to 1e-5 under every integrator, each at a step it is made for (the
 /// explicit ones small, the large-step ones at 1/120 s), by whichever place its contact acts
@@ -137,17 +151,7 @@ fn body_velocity(app: &App, body: Entity) -> DVec2 {
 /// the box does not see it (the pair keeps 78 %, never more than it had).
 #[test]
 fn a_head_on_impact_keeps_the_momentum() {
-    for (integrator, dt, frames) in [
-        (Integrator::SymplecticEuler, 1e-4, 8000),
-        (Integrator::ExplicitEuler, 1e-5, 80000),
-        (Integrator::VelocityVerlet, 1e-4, 8000),
-        (Integrator::Rk4, 1e-4, 8000),
-        (Integrator::Xpbd, 1.0 / 120.0, 96),
-        (Integrator::ImplicitEuler, 1.0 / 120.0, 96),
-        (Integrator::ProjectiveDynamics, 1.0 / 120.0, 96),
-        (Integrator::Bdf2, 1.0 / 120.0, 96),
-        (Integrator::Vbd, 1.0 / 120.0, 96),
-    ] {
+    for (integrator, dt, frames) in EACH_METHOD_FOR_0_8_S {
         for ball in [true, false] {
             let mut app = coupled(integrator, dt, Vec2::ZERO);
             app.world_mut().resource_mut::<SimParams>().iterations.vbd = 200;
@@ -217,17 +221,7 @@ fn gas_ring(world: &mut World, centre: DVec2, mass: f64, v: DVec2) -> Vec<Entity
 /// every integrator (VBD at 200 iterations, as in [`a_head_on_impact_keeps_the_momentum`]).
 #[test]
 fn a_box_corner_pushes_a_ring_by_its_outline() {
-    for (integrator, dt, frames) in [
-        (Integrator::SymplecticEuler, 1e-4, 8000),
-        (Integrator::ExplicitEuler, 1e-5, 80000),
-        (Integrator::VelocityVerlet, 1e-4, 8000),
-        (Integrator::Rk4, 1e-4, 8000),
-        (Integrator::Xpbd, 1.0 / 120.0, 96),
-        (Integrator::ImplicitEuler, 1.0 / 120.0, 96),
-        (Integrator::ProjectiveDynamics, 1.0 / 120.0, 96),
-        (Integrator::Bdf2, 1.0 / 120.0, 96),
-        (Integrator::Vbd, 1.0 / 120.0, 96),
-    ] {
+    for (integrator, dt, frames) in EACH_METHOD_FOR_0_8_S {
         let mut app = coupled(integrator, dt, Vec2::ZERO);
         let mut params = app.world_mut().resource_mut::<SimParams>();
         params.iterations.vbd = 200;

@@ -415,28 +415,38 @@ fn the_balloons_never_enter_each_other() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+/// A gas ring of 12 particles of 50 g, in a scene's text: round `centre` at `radius` (where
+/// its springs of k = 1e4 are at rest), the first `phase` twelfths past angle 0, all moving at
+/// `vel`, filled with a gas of `nrt`; appended to the scene's lists of particles, springs and
+/// pressure bodies.
+fn ring_of_12(
+    (particles, springs, loops): (&mut Vec<String>, &mut Vec<String>, &mut Vec<String>),
+    (centre, radius, phase): ((f64, f64), f64, f64),
+    (vel, nrt): ((f64, f64), f64),
+) {
+    let first = particles.len();
+    let rest = 2.0 * radius * (std::f64::consts::PI / 12.0).sin();
+    for k in 0..12 {
+        let a = std::f64::consts::TAU * (k as f64 + phase) / 12.0;
+        let (x, y) = (centre.0 + radius * a.cos(), centre.1 + radius * a.sin());
+        particles.push(format!("(pos: ({x}, {y}), vel: {vel:?}, mass: 0.05)"));
+        let (a, b) = (first + k, first + (k + 1) % 12);
+        springs.push(format!(
+            "(a: {a}, b: {b}, stiffness: 10000.0, rest: {rest})"
+        ));
+    }
+    let ids: Vec<String> = (first..first + 12).map(|i| i.to_string()).collect();
+    loops.push(format!("(particles: [{}], nrt: {nrt:?})", ids.join(", ")));
+}
+
 /// Two gas-filled rings of 12 particles (spaced eight contact diameters apart), thrown at
 /// each other at 2 m/s with no gravity, under `integrator` at `dt`, bodies colliding by their
 /// outlines when `outlines`.
 fn thrown_rings(integrator: Integrator, dt: f64, outlines: bool) -> App {
-    let mut particles = vec![];
-    let mut springs = vec![];
-    let mut loops = vec![];
+    let (mut particles, mut springs, mut loops) = (vec![], vec![], vec![]);
     for (cx, vx) in [(0.35, 2.0), (0.65, -2.0)] {
-        let first = particles.len();
-        for k in 0..12 {
-            let a = std::f64::consts::TAU * k as f64 / 12.0;
-            let (x, y) = (cx + 0.08 * a.cos(), 0.5 + 0.08 * a.sin());
-            particles.push(format!("(pos: ({x}, {y}), vel: ({vx}, 0.0), mass: 0.05)"));
-            let rest = 2.0 * 0.08 * (std::f64::consts::PI / 12.0).sin();
-            springs.push(format!(
-                "(a: {}, b: {}, stiffness: 10000.0, rest: {rest})",
-                first + k,
-                first + (k + 1) % 12
-            ));
-        }
-        let ids: Vec<String> = (first..first + 12).map(|i| i.to_string()).collect();
-        loops.push(format!("(particles: [{}], nrt: 5.0)", ids.join(", ")));
+        let lists = (&mut particles, &mut springs, &mut loops);
+        ring_of_12(lists, ((cx, 0.5), 0.08, 0.0), ((vx, 0.0), 5.0));
     }
     let text = format!(
         "(gravity: (0.0, 0.0), damping: 0.0, spring_damping: 0.5, ground: None, dt: {dt}, integrator: {integrator:?}, \
@@ -510,25 +520,10 @@ fn implicit_euler_keeps_the_piles_energy_at_a_frames_step() {
 /// ledge (a segment), so that it tips off it as the `balloon` scene's ball rolls off its
 /// slope. Bodies collide by their outlines.
 fn rings_on_corners(integrator: Integrator, dt: f64) -> App {
-    let mut particles = vec![];
-    let mut springs = vec![];
-    let mut loops = vec![];
-    for (cx, cy) in [(0.3, 0.4), (0.6, 0.48)] {
-        let first = particles.len();
-        let radius = 0.1;
-        for k in 0..12 {
-            let a = std::f64::consts::TAU * (k as f64 + 0.5) / 12.0;
-            let (x, y) = (cx + radius * a.cos(), cy + radius * a.sin());
-            particles.push(format!("(pos: ({x}, {y}), mass: 0.05)"));
-            let rest = 2.0 * radius * (std::f64::consts::PI / 12.0).sin();
-            springs.push(format!(
-                "(a: {}, b: {}, stiffness: 10000.0, rest: {rest})",
-                first + k,
-                first + (k + 1) % 12
-            ));
-        }
-        let ids: Vec<String> = (first..first + 12).map(|i| i.to_string()).collect();
-        loops.push(format!("(particles: [{}], nrt: 10.0)", ids.join(", ")));
+    let (mut particles, mut springs, mut loops) = (vec![], vec![], vec![]);
+    for centre in [(0.3, 0.4), (0.6, 0.48)] {
+        let lists = (&mut particles, &mut springs, &mut loops);
+        ring_of_12(lists, (centre, 0.1, 0.5), ((0.0, 0.0), 10.0));
     }
     let text = format!(
         "(damping: 0.1, spring_damping: 1.0, dt: {dt}, integrator: {integrator:?}, \
