@@ -5,10 +5,22 @@
 //! not its round-off.
 
 /// `x` with `decimals` decimals below 10⁹ in magnitude (and when it is not finite); as
-/// `4.900e300` from there up.
+/// `4.900e300` from there up. A value that rounds to zero reads as zero, without the sign of a
+/// −0.0 or of round-off under it (an empty scene's spring energy showed as −0.000000 J).
+///
+/// ```
+/// assert_eq!(hooke::readable::number(-0.0, 6), "0.000000");
+/// assert_eq!(hooke::readable::number(-4e-9, 6), "0.000000");
+/// assert_eq!(hooke::readable::number(-0.25, 2), "-0.25");
+/// assert_eq!(hooke::readable::number(4.9e300, 6), "4.900e300");
+/// ```
 pub fn number(x: f64, decimals: usize) -> String {
     if !x.is_finite() || x.abs() < 1e9 {
-        format!("{x:.decimals$}")
+        let text = format!("{x:.decimals$}");
+        match text.strip_prefix('-') {
+            Some(zero) if zero.bytes().all(|b| b == b'0' || b == b'.') => zero.to_string(),
+            _ => text,
+        }
     } else {
         format!("{x:.3e}")
     }

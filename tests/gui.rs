@@ -569,6 +569,14 @@ fn every_control_works_under_real_input_and_the_log_stays_quiet() {
         st["device"] == "cpu" && st["gpu_wanted"] == false
     });
 
+    // The empty canvas's line under its middle takes no input: a click on its words adds a
+    // particle (it is then gone), and undo takes the particle back.
+    s.move_px(780, 673);
+    s.x(&["click", "1"]);
+    s.expect("a particle added under the line", |st| st["particles"] == 1);
+    s.key("ctrl+z");
+    s.expect("and taken back", |st| st["particles"] == 0);
+
     // Left click on empty canvas: three particles joined within 0.15, the first pinned.
     for (i, &(x, y)) in [(0.5, 0.8), (0.6, 0.8), (0.55, 0.7)].iter().enumerate() {
         s.move_to(x, y);

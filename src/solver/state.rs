@@ -230,12 +230,13 @@ impl State {
         let (kinetic, potential_gravity) = particles
             .into_iter()
             .fold((0.0, 0.0), |(k, g), (bk, bg)| (k + bk, g + bg));
+        // Folded from +0.0: a float `sum` starts at −0.0, which a scene without springs kept.
         let potential_springs = threads
             .blocks(springs, &self.springs, ENERGY_BLOCK, |_, s| {
                 kernels::spring_energy(&self.x, s)
             })
             .into_iter()
-            .sum();
+            .fold(0.0, |sum, block| sum + block);
         Energy {
             kinetic,
             potential_gravity,
@@ -277,6 +278,21 @@ impl Energy {
 mod tests {
     use super::*;
     use crate::solver::fixtures::{positions, tangle};
+
+    /// A state with no springs and no gas: their energy is +0.0, not the −0.0 a float `sum`
+    /// of nothing gives (the panel showed an empty scene's springs at −0.000000 J).
+    #[test]
+    fn a_state_without_springs_or_gas_has_zero_energy_in_them_not_minus_zero() {
+        let e = State::default().energy(DVec2::new(0.0, -9.8));
+        for part in [
+            e.kinetic,
+            e.potential_gravity,
+            e.potential_springs,
+            e.potential_gas,
+        ] {
+            assert!(part == 0.0 && part.is_sign_positive(), "{e:?}");
+        }
+    }
 
     /// A scrambled network of 100,000 springs on 20,000 particles (twelve blocks of springs,
     /// three of particles, past the threads' threshold): the energy has the same bits on one,

@@ -1,4 +1,5 @@
-//! The list of controls, shown by the help overlay (H or ?) and in the panel.
+//! The list of controls, shown by the help overlay (H or ?) and in the panel, and the line an
+//! empty canvas shows.
 
 use bevy::prelude::*;
 use bevy_egui::{EguiContexts, egui};
@@ -88,5 +89,37 @@ pub fn help_overlay(mut contexts: EguiContexts, mut help: ResMut<HelpOverlay>) -
     if !open {
         help.0 = false;
     }
+    Ok(())
+}
+
+/// What an empty canvas says, under its middle: the first things to do, and where the rest are.
+pub const EMPTY_CANVAS: &str =
+    "Click to add a particle (shift: pinned) · J + drag: a ball · G: run · H: every control";
+
+/// The line on an empty canvas (no particle, no obstacle, no body), so that the app opened with
+/// no scene does not greet a newcomer with a blank box: it goes with the first particle or
+/// obstacle, and while the help overlay or a file drop's line is up. It takes no input, so a
+/// click under it still adds a particle.
+pub fn empty_canvas_hint(
+    mut contexts: EguiContexts,
+    particles: Query<(), With<crate::sim::Particle>>,
+    built: Query<(), With<crate::sim::Obstacle>>,
+    obstacles: Res<crate::sim::Obstacles>,
+    help: Res<HelpOverlay>,
+    over: Res<super::drop::FilesOver>,
+) -> Result {
+    let empty = particles.is_empty() && built.is_empty() && obstacles.placed().is_empty();
+    if !empty || help.0 || !over.0.is_empty() {
+        return Ok(());
+    }
+    let ctx = contexts.ctx_mut()?;
+    egui::Area::new(egui::Id::new("empty-canvas-hint"))
+        .anchor(egui::Align2::CENTER_BOTTOM, [140.0, -120.0])
+        .order(egui::Order::Background)
+        .interactable(false)
+        .show(ctx, |ui| {
+            let text = egui::RichText::new(EMPTY_CANVAS).color(ui.visuals().weak_text_color());
+            ui.add(egui::Label::new(text).wrap_mode(egui::TextWrapMode::Extend));
+        });
     Ok(())
 }

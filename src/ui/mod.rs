@@ -90,6 +90,7 @@ impl Plugin for AppPlugin {
                 (
                     panel::side_panel,
                     controls::help_overlay,
+                    controls::empty_canvas_hint,
                     drop::drop_hint,
                     quit::quit_prompt,
                 )

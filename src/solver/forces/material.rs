@@ -344,7 +344,11 @@ impl Materials {
 
     /// The gas bodies' potential, J.
     pub fn gas_energy(&self, x: &[DVec2]) -> f64 {
-        self.gas.iter().map(|b| b.energy(x)).sum()
+        // From +0.0: a float `sum` starts at −0.0, which a scene without gas kept.
+        self.gas
+            .iter()
+            .map(|b| b.energy(x))
+            .fold(0.0, |sum, e| sum + e)
     }
 
     /// The muscle of packed spring `i`, if it is one (for a patched rest length).
