@@ -202,8 +202,10 @@ impl Outlines {
                 let first = near.len();
                 let lo = at(point - DVec2::splat(radius));
                 let hi = at(point + DVec2::splat(radius));
-                let cells = (hi.0 - lo.0 + 1).saturating_mul(hi.1 - lo.1 + 1);
-                if cells as usize > self.edges.len() {
+                // In f64: a disc of 1e200 m spans more cells than an i64 counts.
+                let span = |a: i64, b: i64| (b as i128 - a as i128 + 1) as f64;
+                let cells = span(lo.0, hi.0) * span(lo.1, hi.1);
+                if cells > self.edges.len() as f64 {
                     // A round wider than the outlines' cells (a large disc): every edge.
                     near.extend(
                         (0..self.edges.len() as u32)
@@ -740,6 +742,22 @@ mod tests {
         let bottom = (s.x[0].y + s.x[1].y) / 2.0;
         assert!((bottom - (-0.001 + 0.01)).abs() < 1e-9, "{:?}", s.x);
         assert_eq!(s.x[4], DVec2::new(3.0, 3.0));
+    }
+
+    /// A disc of 1e200 m (finite, so valid) spans more cells than an i64 counts: the corners'
+    /// listing takes every edge instead, without overflowing.
+    #[test]
+    fn a_huge_disc_does_not_overflow_the_corners_cells() {
+        use crate::solver::contact::obstacle::Shape;
+        let disc = Placed::at(
+            Shape::Circle { radius: 1e200 },
+            DVec2::new(0.5, -1e200),
+            0.0,
+        );
+        let s = square_and_particle(DVec2::new(3.0, 3.0));
+        let mut o = Outlines::default();
+        o.ready(&s, 0.1, &[disc]);
+        assert_eq!(o.corners.len(), 1);
     }
 
     #[test]
