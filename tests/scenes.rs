@@ -344,10 +344,10 @@ fn a_missing_field_is_named_with_its_place() {
     }
 }
 
-/// The slips of someone who writes JSON, or the command line's fractions and hyphens, are named
-/// with what RON wants, at their line, in place of ron's own words ("Unexpected char '6'",
-/// "Expected opening `(`", "Expected identifier", "try the raw identifier
-/// `r#projective-dynamics`").
+/// The slips of someone who writes JSON, or the command line's fractions and hyphens, or who
+/// leaves a comma out, are named with what RON wants, at their line, in place of ron's own words
+/// ("Unexpected char '6'", "Expected opening `(`", "Expected identifier", "try the raw
+/// identifier `r#projective-dynamics`", "Expected comma").
 #[test]
 fn a_slip_from_json_or_the_command_line_is_named_with_the_ron_for_it() {
     for (from, to, line, says) in [
@@ -405,6 +405,25 @@ fn a_slip_from_json_or_the_command_line_is_named_with_the_ron_for_it() {
             6,
             "a field's name has no hyphens: `spring_damping`, not `spring-damping`",
         ),
+        (
+            "dt: 0.0001,",
+            "dt: 0.0001 integrator: Rk4,",
+            6,
+            "a comma is missing before `integrator`",
+        ),
+        (
+            "pinned: true),",
+            "pinned: true)",
+            9,
+            "a comma is missing before `(pos`",
+        ),
+        (
+            "(0.0, -9.8)",
+            "(0.0 -9.8)",
+            2,
+            "a comma is missing before `-9.8`",
+        ),
+        ("dt: 0.0001,", "dt: 0.0001", 7, "a comma is missing"),
     ] {
         let msg = parse(&scene_text(|s| s.replacen(from, to, 1)))
             .expect_err(to)

@@ -52,7 +52,8 @@ fn around(text: &str, line: usize, col: usize) -> (&str, &str) {
 /// - a fraction (`dt: 1/60`, which the command line takes): RON reads `/` as a comment;
 /// - brackets for a pair or a struct (`gravity: [0.0, -9.8]`), parentheses for a list;
 /// - the command line's hyphens (`integrator: projective-dynamics`, `spring-damping: 2.0`),
-///   for which ron suggests a raw identifier, `r#projective-dynamics`, that no scene knows.
+///   for which ron suggests a raw identifier, `r#projective-dynamics`, that no scene knows;
+/// - a comma left out between two fields or entries (ron says "Expected comma" and no more).
 fn slip(code: &ron::Error, before: &str, after: &str) -> Option<String> {
     match code {
         ron::Error::SuggestRawIdentifier(name) if name.contains('-') => {
@@ -107,6 +108,20 @@ fn slip(code: &ron::Error, before: &str, after: &str) -> Option<String> {
         ron::Error::ExpectedArray => after
             .starts_with('(')
             .then(|| "a list is written in brackets: [ … ], not ( … )".to_string()),
+        ron::Error::ExpectedComma => {
+            // What follows, as far as its first name or number: a field (`integrator`), an
+            // entry (`(pos`), a value (`0.2`).
+            let stop = |c: char| c.is_whitespace() || matches!(c, ':' | ',' | ')' | ']');
+            let next = &after[..after.find(stop).unwrap_or(after.len())];
+            Some(if next.is_empty() {
+                "a comma is missing here: RON separates fields and entries with commas".into()
+            } else {
+                format!(
+                    "a comma is missing before `{next}`: RON separates fields and entries with \
+                     commas"
+                )
+            })
+        }
         _ => None,
     }
 }
