@@ -699,7 +699,11 @@ fn every_bad_scene_case_through_the_cli() {
             "gravity: (inf, -9.8)",
             "gravity: must be finite",
         ),
-        ("damping: 10.0,", "damping: 10.0", "Expected comma"),
+        (
+            "damping: 10.0,",
+            "damping: 10.0",
+            "a comma is missing before `ground`",
+        ),
     ];
     for (i, (from, to, needle)) in cases.iter().enumerate() {
         let text = good.replacen(from, to, 1);
