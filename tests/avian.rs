@@ -4,6 +4,7 @@
 
 #![cfg(feature = "avian")]
 
+mod common;
 use avian2d::prelude::*;
 use bevy::math::DVec2;
 use bevy::prelude::*;
@@ -249,17 +250,8 @@ fn a_box_corner_pushes_a_ring_by_its_outline() {
             let at = app.world().get::<Position>(body).unwrap().0.as_dvec2();
             let turn = app.world().get::<Rotation>(body).unwrap().as_radians() as f64;
             let corner = at + DVec2::from_angle(turn).rotate(DVec2::new(-0.05, -0.05));
-            let x = app.world().resource::<Solver>().x().to_vec();
-            let mut odd = false;
-            for k in 0..x.len() {
-                let (a, b) = (x[k], x[(k + 1) % x.len()]);
-                if (a.y > corner.y) != (b.y > corner.y)
-                    && corner.x < a.x + (corner.y - a.y) * (b.x - a.x) / (b.y - a.y)
-                {
-                    odd = !odd;
-                }
-            }
-            inside += odd as usize;
+            let ring = app.world().resource::<Solver>().x();
+            inside += common::inside(ring, corner) as usize;
         }
         assert!(touched, "{integrator}: the ring never reached the box");
         let after = particle_momentum(&app) + body_velocity(&app, body);

@@ -325,18 +325,6 @@ fn every_method_then_large_steps() -> impl Iterator<Item = (Integrator, f64)> {
     own.chain(LARGE_STEP.into_iter().map(|m| (m, FRAME)))
 }
 
-/// Whether `p` lies inside the closed polygon `ring` (crossing number).
-fn inside(ring: &[bevy::math::DVec2], p: bevy::math::DVec2) -> bool {
-    let mut odd = false;
-    for k in 0..ring.len() {
-        let (a, b) = (ring[k], ring[(k + 1) % ring.len()]);
-        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) * (b.x - a.x) / (b.y - a.y) {
-            odd = !odd;
-        }
-    }
-    odd
-}
-
 /// The particles of each ring (index ranges, in order around it) that lie inside the other.
 fn inside_the_other(app: &App, rings: [std::ops::Range<usize>; 2]) -> usize {
     let x = solver(app).x();

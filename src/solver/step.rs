@@ -490,9 +490,9 @@ pub fn collide(
         Some(contact) => {
             let surface = around.surface(dt, gravity);
             let follows = integrator.unconditionally_stable().then_some(dt);
-            let obstacles = (around.obstacles, around.reactions);
+            let reactions = around.reactions;
             w.outlines
-                .collide(s, contact, surface, follows, OUTLINE_PASSES, obstacles)
+                .collide(s, contact, surface, follows, OUTLINE_PASSES, reactions)
         }
         None => 0,
     };

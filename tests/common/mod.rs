@@ -185,3 +185,15 @@ pub fn folding_strip(integrator: Integrator, dt: f64) -> (Scene, f64) {
     scene.contact = pairs_on(r, 0.3);
     (scene, r)
 }
+
+/// Whether `p` lies inside the closed polygon `ring` (crossing number).
+pub fn inside(ring: &[DVec2], p: DVec2) -> bool {
+    let mut odd = false;
+    for k in 0..ring.len() {
+        let (a, b) = (ring[k], ring[(k + 1) % ring.len()]);
+        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) * (b.x - a.x) / (b.y - a.y) {
+            odd = !odd;
+        }
+    }
+    odd
+}

@@ -54,12 +54,14 @@ struct Near {
     start: (f64, f64),
 }
 
-/// An obstacle's corner, where it stands for the step: the point, and the radius of its round.
+/// An obstacle's corner, where it stands for the step: the point, the radius of its round, and
+/// the velocity of the obstacle's material there (the pose stays until the step has collided).
 #[derive(Debug, Clone, Copy)]
 struct Corner {
     obstacle: u32,
     at: DVec2,
     radius: f64,
+    velocity: DVec2,
 }
 
 /// The outlines of a state's bodies and the step's candidates, kept from step to step.
@@ -144,8 +146,7 @@ impl Outlines {
         if !cell.is_finite() {
             return false;
         }
-        let at = |p: DVec2| ((p.x / cell).floor() as i64, (p.y / cell).floor() as i64);
-        let key_of = |(i, j): (i64, i64)| ((i as u64) << 32) ^ (j as u64 & 0xffff_ffff);
+        let at = |p: DVec2| cell_of(p, cell);
         self.cells.clear();
         for (e, &[a, b]) in self.edges.iter().enumerate() {
             let (pa, pb) = (x[a as usize], x[b as usize]);
@@ -153,27 +154,22 @@ impl Outlines {
             let hi = at(pa.max(pb) + DVec2::splat(reach));
             for i in lo.0..=hi.0 {
                 for j in lo.1..=hi.1 {
-                    self.cells.push((key_of((i, j)), e as u32));
+                    self.cells.push((cell_key((i, j)), e as u32));
                 }
             }
         }
         self.cells.sort_unstable();
+        let mut near = std::mem::take(&mut self.near);
         for (p, &xp) in x.iter().enumerate() {
-            let k = key_of(at(xp));
-            let from = self.cells.partition_point(|&(c, _)| c < k);
-            for &(c, e) in &self.cells[from..] {
-                if c != k {
-                    break;
-                }
+            for e in self.edges_in(at(xp)) {
                 let [a, _] = self.edges[e as usize];
                 if self.body[a as usize] == self.body[p] {
                     continue;
                 }
-                if let Some(n) = self.candidate(x, e, p as u32, xp, reach) {
-                    self.near.push(n);
-                }
+                near.extend(self.candidate(x, e, p as u32, xp, reach));
             }
         }
+        self.near = near;
         self.ready_corners(x, reach, cell, obstacles);
         !self.near.is_empty() || !self.near_corners.is_empty()
     }
@@ -181,8 +177,7 @@ impl Outlines {
     /// Lists the obstacles' corners and their candidates, through the cells of [`Self::ready`]
     /// (`cell` wide, each edge in every cell within `reach` of it).
     fn ready_corners(&mut self, x: &[DVec2], reach: f64, cell: f64, obstacles: &[Placed]) {
-        let at = |p: DVec2| ((p.x / cell).floor() as i64, (p.y / cell).floor() as i64);
-        let key_of = |(i, j): (i64, i64)| ((i as u64) << 32) ^ (j as u64 & 0xffff_ffff);
+        let at = |p: DVec2| cell_of(p, cell);
         let (mut found, mut corners, mut near) = (
             std::mem::take(&mut self.found),
             std::mem::take(&mut self.corners),
@@ -197,6 +192,7 @@ impl Outlines {
                     obstacle: o as u32,
                     at: point,
                     radius,
+                    velocity: obstacle.velocity_at(point),
                 });
                 let within = radius + reach;
                 let first = near.len();
@@ -215,11 +211,9 @@ impl Outlines {
                 }
                 for i in lo.0..=hi.0 {
                     for j in lo.1..=hi.1 {
-                        let k = key_of((i, j));
-                        let from = self.cells.partition_point(|&(c, _)| c < k);
-                        let here = self.cells[from..].iter().take_while(|&&(c, _)| c == k);
                         near.extend(
-                            here.filter_map(|&(_, e)| self.candidate(x, e, corner, point, within)),
+                            (self.edges_in((i, j)))
+                                .filter_map(|e| self.candidate(x, e, corner, point, within)),
                         );
                     }
                 }
@@ -231,6 +225,16 @@ impl Outlines {
             }
         }
         (self.found, self.corners, self.near_corners) = (found, corners, near);
+    }
+
+    /// The edges listed in cell `(i, j)` of the last [`Self::ready`].
+    fn edges_in(&self, cell: (i64, i64)) -> impl Iterator<Item = u32> + '_ {
+        let k = cell_key(cell);
+        let from = self.cells.partition_point(|&(c, _)| c < k);
+        self.cells[from..]
+            .iter()
+            .take_while(move |&&(c, _)| c == k)
+            .map(|&(_, e)| e)
     }
 
     /// The candidate of the point `xp` (particle or corner `who`) and edge `e`, if it is
@@ -403,9 +407,8 @@ impl Outlines {
     }
 
     /// Pushes the candidates apart in the state's positions until the deepest is under 1 % of
-    /// `contact` (at most `passes` passes), then the velocity pass; the obstacles' corners
-    /// (at `obstacles`, the same as at [`Self::ready`]) the same way, their impulses noted in
-    /// `reactions`. `velocity_follows: Some(dt)` adds the push over dt to the velocities.
+    /// `contact` (at most `passes` passes), then the velocity pass; the obstacles' corners the
+    /// same way, their impulses noted in `reactions`. `velocity_follows: Some(dt)` adds the push over dt to the velocities.
     /// Returns the contacts of the first pass.
     pub(crate) fn collide(
         &self,
@@ -414,7 +417,7 @@ impl Outlines {
         surface: Surface,
         velocity_follows: Option<f64>,
         passes: usize,
-        (obstacles, reactions): (&[Placed], Option<&Reactions>),
+        reactions: Option<&Reactions>,
     ) -> usize {
         if self.near.is_empty() && self.near_corners.is_empty() {
             return 0;
@@ -432,7 +435,7 @@ impl Outlines {
             }
         }
         self.respond(s, contact, surface);
-        self.respond_corners(s, r, surface, obstacles, reactions);
+        self.respond_corners(s, r, surface, reactions);
         first.unwrap_or(0)
     }
 
@@ -444,7 +447,6 @@ impl Outlines {
         s: &mut State,
         r: f64,
         surface: Surface,
-        obstacles: &[Placed],
         reactions: Option<&Reactions>,
     ) {
         let (x, v, w) = (&s.x, &mut s.v, &s.inv_mass);
@@ -454,15 +456,12 @@ impl Outlines {
             };
             let (sa, sb) = (1.0 - c.t, c.t);
             let wsum = sa * sa * w[c.a] + sb * sb * w[c.b];
-            let Some(obstacle) = obstacles.get(corner.obstacle as usize) else {
-                continue;
-            };
             if wsum == 0.0 {
                 continue;
             }
             // The edge's point against the obstacle's surface, whose normal points from the
             // corner to the edge.
-            let rel = v[c.a] * sa + v[c.b] * sb - obstacle.velocity_at(corner.at);
+            let rel = v[c.a] * sa + v[c.b] * sb - corner.velocity;
             let change = respond(rel, DVec2::ZERO, -c.normal, surface) - rel;
             if change == DVec2::ZERO {
                 continue;
@@ -637,6 +636,16 @@ impl Outlines {
             }
         }
     }
+}
+
+/// The cell of side `cell` that holds `p`.
+fn cell_of(p: DVec2, cell: f64) -> (i64, i64) {
+    ((p.x / cell).floor() as i64, (p.y / cell).floor() as i64)
+}
+
+/// A cell's key in the sorted list of (cell, edge).
+fn cell_key((i, j): (i64, i64)) -> u64 {
+    ((i as u64) << 32) ^ (j as u64 & 0xffff_ffff)
 }
 
 /// Point p in the frame of edge a–b: where along it (0 at a, 1 at b, unclamped) and its
