@@ -207,21 +207,6 @@ fn gas_ring(integrator: Integrator, dt: f64, segments: usize, k: f64, nrt: f64) 
     scene
 }
 
-/// The area where the gas's pressure balances the springs' tension, for a regular N-gon with
-/// springs of rest length L₀ (the side at radius 0.1). With side s, area A = N s²/(4 tan(π/N))
-/// and the energy N k (s − L₀)²/2 − nRT ln A is stationary where N k (s − L₀) = 2 nRT/s:
-/// s = (L₀ + √(L₀² + 8 nRT/(N k)))/2.
-fn balanced_area(segments: usize, k: f64, nrt: f64) -> f64 {
-    let n = segments as f64;
-    let l0 = 2.0 * 0.1 * (PI / n).sin();
-    let s = 0.5 * (l0 + (l0 * l0 + 8.0 * nrt / (n * k)).sqrt());
-    n * s * s / (4.0 * (PI / n).tan())
-}
-
-fn ring_area(solver: &Solver) -> f64 {
-    solver.materials().gas()[0].signed_area(solver.x()).abs()
-}
-
 /// The steps each method takes on the rings: the explicit ones at the assignment's 1e-4 s,
 /// the large-step ones at 1/300 s, where their implicit treatment of the gas is what holds.
 fn ring_dt(integrator: Integrator) -> f64 {

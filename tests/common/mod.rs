@@ -197,3 +197,20 @@ pub fn inside(ring: &[DVec2], p: DVec2) -> bool {
     }
     odd
 }
+
+/// The area where the gas's pressure balances the springs' tension, for a regular N-gon with
+/// springs of rest length L₀ (the side at radius 0.1). With side s, area A = N s²/(4 tan(π/N))
+/// and the energy N k (s − L₀)²/2 − nRT ln A is stationary where N k (s − L₀) = 2 nRT/s:
+/// s = (L₀ + √(L₀² + 8 nRT/(N k)))/2.
+pub fn balanced_area(segments: usize, k: f64, nrt: f64) -> f64 {
+    use std::f64::consts::PI;
+    let n = segments as f64;
+    let l0 = 2.0 * 0.1 * (PI / n).sin();
+    let s = 0.5 * (l0 + (l0 * l0 + 8.0 * nrt / (n * k)).sqrt());
+    n * s * s / (4.0 * (PI / n).tan())
+}
+
+/// The area of the solver's first gas body.
+pub fn ring_area(solver: &Solver) -> f64 {
+    solver.materials().gas()[0].signed_area(solver.x()).abs()
+}
