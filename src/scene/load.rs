@@ -61,7 +61,7 @@ impl fmt::Display for SceneError {
                 write!(f, "cannot read scene {}: {error}", path.display())?;
                 // `--scene rope.ron` outside the repository: the name was meant.
                 let stem = path.file_stem().and_then(|s| s.to_str());
-                match stem.filter(|s| super::presets::names().contains(s)) {
+                match stem.filter(|s| super::builtin::names().contains(s)) {
                     Some(name) if error.kind() == std::io::ErrorKind::NotFound => {
                         write!(
                             f,
@@ -80,7 +80,7 @@ impl fmt::Display for SceneError {
             SceneError::Unknown { name, near } => {
                 write!(f, "no scene file or built-in scene named `{name}`")?;
                 if near.is_empty() {
-                    let all: Vec<&str> = super::presets::BUILTIN.iter().map(|(n, _)| *n).collect();
+                    let all = super::builtin::names();
                     write!(f, " (built-in scenes: {})", all.join(", "))
                 } else {
                     let listed: Vec<String> = near.iter().map(|n| format!("`{n}`")).collect();

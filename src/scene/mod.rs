@@ -1,6 +1,7 @@
 //! Scenes: the RON file format, parametric generators, validation and loading.
 
 pub mod bodies;
+mod builtin;
 pub mod format;
 pub mod generate;
 pub mod load;

@@ -4,7 +4,7 @@
 //! order. Where the CPU has AVX they hand the spring pass and the particle sweep to
 //! [`super::wide`]'s forms, which give the same bits.
 
-use super::spring::scatter_pairs;
+use super::spring::{energy_total, one_spring_energy, scatter_pairs};
 use super::sweep::{Contact, Motion, Sweep, SweepArrays, finite_probe, sweep_portable};
 use crate::solver::packed::PackedSpring;
 use glam::DVec2;
@@ -73,22 +73,6 @@ pub fn particle_energy(x: &[DVec2], v: &[DVec2], mass: &[f64], gravity: DVec2) -
         potential -= m * gravity.dot(*x);
     }
     (kinetic, potential)
-}
-
-/// ½k(|x_a − x_b| − L)².
-#[inline(always)]
-pub(crate) fn one_spring_energy(s: &PackedSpring, x: &[DVec2]) -> f64 {
-    let stretch = (x[s.a as usize] - x[s.b as usize]).length() - s.rest;
-    0.5 * s.k * stretch * stretch
-}
-
-/// [`spring_energy`]'s eight running sums and the springs past the last eight, added in one
-/// order for both of its forms.
-#[inline(always)]
-pub(crate) fn energy_total(sums: [f64; 8], tail: &[PackedSpring], x: &[DVec2]) -> f64 {
-    let s: [f64; 4] = std::array::from_fn(|i| sums[i] + sums[i + 4]);
-    let tail: f64 = tail.iter().map(|s| one_spring_energy(s, x)).sum();
-    ((s[0] + s[1]) + (s[2] + s[3])) + tail
 }
 
 /// v += dt f / m. Pinned particles have inverse mass 0 and stay at rest.

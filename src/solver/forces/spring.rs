@@ -1,7 +1,7 @@
-//! One spring's force and its projective dynamics projection, and the scatter's running sum:
-//! what the scalar and the AVX spring passes ([`super::kernels::for_each_spring_force`],
-//! [`super::wide`]), the stiffness product ([`super::stiffness`]) and projective dynamics'
-//! local step share.
+//! One spring's force, its energy and its projective dynamics projection, and the scatter's
+//! running sum: what the scalar and the AVX spring passes
+//! ([`super::kernels::for_each_spring_force`], [`super::wide`]), the stiffness product
+//! ([`super::stiffness`]) and projective dynamics' local step share.
 
 use crate::solver::packed::PackedSpring;
 use glam::DVec2;
@@ -20,6 +20,22 @@ pub fn spring_force(s: &PackedSpring, x: &[DVec2]) -> Option<DVec2> {
         return None;
     }
     Some(d * (-s.k * (l - s.rest) / l))
+}
+
+/// ½k(|x_a − x_b| − L)².
+#[inline(always)]
+pub(crate) fn one_spring_energy(s: &PackedSpring, x: &[DVec2]) -> f64 {
+    let stretch = (x[s.a as usize] - x[s.b as usize]).length() - s.rest;
+    0.5 * s.k * stretch * stretch
+}
+
+/// [`super::kernels::spring_energy`]'s eight running sums and the springs past the last eight, added in one
+/// order for both of its forms.
+#[inline(always)]
+pub(crate) fn energy_total(sums: [f64; 8], tail: &[PackedSpring], x: &[DVec2]) -> f64 {
+    let s: [f64; 4] = std::array::from_fn(|i| sums[i] + sums[i + 4]);
+    let tail: f64 = tail.iter().map(|s| one_spring_energy(s, x)).sum();
+    ((s[0] + s[1]) + (s[2] + s[3])) + tail
 }
 
 /// The force on end a of a spring with a dashpot `c` (N·s/m) along it: the spring's force

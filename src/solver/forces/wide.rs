@@ -227,7 +227,7 @@ pub unsafe fn spring_energy(x: &[DVec2], springs: &[PackedSpring]) -> f64 {
     // The registers hold their springs in the lane order [0, 2, 1, 3].
     let order = [0, 2, 1, 3, 4, 6, 5, 7];
     let sums = std::array::from_fn(|i| held[order[i]]);
-    super::kernels::energy_total(sums, octs.remainder(), x)
+    super::spring::energy_total(sums, octs.remainder(), x)
 }
 
 /// Four springs' ½k(|x_a − x_b| − L)², in [`Quad`]'s lane order [0, 2, 1, 3].

@@ -132,6 +132,14 @@ impl Gpu {
         self.device.features().contains(wgpu::Features::SHADER_F64)
     }
 
+    /// Waits until everything submitted to the queue has run.
+    pub(super) fn wait(&self) -> Result<(), GpuError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::ReadBack(e.to_string()))
+    }
+
     /// The precisions this device runs: f32, and f64 where the adapter has it.
     pub fn precisions(&self) -> Vec<Precision> {
         let mut p = vec![Precision::F32];

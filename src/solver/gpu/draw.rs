@@ -7,7 +7,8 @@
 //! with the first vertex of each shape's run; an app finds those in its renderer's meshes.
 
 use super::context::Precision;
-use super::explicit::{GpuStep, entries, pipeline, shader, shape};
+use super::kernel::{entries, pipeline, shader, shape};
+use super::step::GpuStep;
 
 const SOURCE: &str = include_str!("draw.wgsl");
 /// Threads in a work group (the kernels' `@workgroup_size`).

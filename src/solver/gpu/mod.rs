@@ -19,11 +19,16 @@
 //! The kernels take a [`Gpu`], a wgpu device and queue: the CLI and the tests open their own,
 //! an app hands over its renderer's. Nothing here names an engine type.
 
+mod contact;
 mod context;
 mod draw;
-mod explicit;
+mod kernel;
 mod pairs;
+mod readback;
+mod settings;
+mod step;
 mod summary;
+mod tear;
 mod xpbd;
 
 pub use context::{Gpu, GpuError, Precision};
@@ -31,5 +36,6 @@ pub use draw::{
     DOT_CORNERS, DrawSource, DrawStyle, DrawTarget, DrawTargets, Painter, SPRING_CORNERS,
     VERTEX_BYTES,
 };
-pub use explicit::{ExplicitMethod, ExplicitSettings, GpuStep, TearSettings};
+pub use settings::{ExplicitMethod, ExplicitSettings, TearSettings};
+pub use step::GpuStep;
 pub use summary::Summary;

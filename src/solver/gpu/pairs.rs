@@ -9,7 +9,7 @@
 //! cheaper than the reduction that would tell when it is due.
 
 use super::context::{Gpu, Precision};
-use super::explicit::{buffer, dispatch, entries, pipeline, shape};
+use super::kernel::{buffer, dispatch, entries, pipeline, shape};
 use crate::solver::contact::pairs::MAX_ITERATIONS;
 
 /// Threads in a work group (the kernels' `@workgroup_size`).

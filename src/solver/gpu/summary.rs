@@ -4,7 +4,7 @@
 //! every other tick it reads this.
 
 use super::context::{Gpu, Precision};
-use super::explicit::{buffer, dispatch, entries, pipeline, shader, shape, write_settings};
+use super::kernel::{buffer, dispatch, entries, pipeline, shader, shape, submit, write_settings};
 use crate::solver::state::Energy;
 
 /// The kernels' source, in f32.
@@ -136,7 +136,7 @@ impl SummaryPass {
             [n, self.dispatch.0 * GROUP, self.count, 0],
             &[gravity.x, gravity.y],
         );
-        super::explicit::submit(gpu, "hooke summary", |pass| {
+        submit(gpu, "hooke summary", |pass| {
             dispatch(pass, &self.partials, &self.groups[current], self.dispatch);
             dispatch(pass, &self.total, &self.total_group, (1, 1));
         });

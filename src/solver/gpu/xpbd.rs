@@ -4,8 +4,10 @@
 //! the substeps (`contact/inside.rs`): the iterate held out of the surfaces before the first
 //! prediction and after each substep's sweeps, and particle pairs pushed apart there.
 
+use super::contact::{ContactPass, Iterate};
 use super::context::{Gpu, Precision};
-use super::explicit::{ContactPass, buffer, dispatch, entries, pipeline, reals, shader};
+use super::kernel::{buffer, dispatch, entries, pipeline, reals, shader, write_settings};
+use super::settings::ExplicitSettings;
 use crate::solver::methods::xpbd::coloured;
 use crate::solver::state::State;
 
@@ -22,13 +24,13 @@ pub(super) struct XpbdPass {
     predict: (wgpu::ComputePipeline, [wgpu::BindGroup; 2]),
     project: (wgpu::ComputePipeline, Vec<wgpu::BindGroup>),
     finish: (wgpu::ComputePipeline, wgpu::BindGroup),
-    /// The settings (`xpbd.wgsl`'s `Params`), written by the step's `set`.
-    pub(super) params: wgpu::Buffer,
+    /// The settings (`xpbd.wgsl`'s `Params`), written by [`Self::set`].
+    params: wgpu::Buffer,
     /// The iterate, each substep's start, and each particle's heading before contact: what
     /// the contact inside the substeps reads and writes.
-    pub(super) pos: wgpu::Buffer,
-    pub(super) prev: wgpu::Buffer,
-    pub(super) heading: wgpu::Buffer,
+    pos: wgpu::Buffer,
+    prev: wgpu::Buffer,
+    heading: wgpu::Buffer,
     /// Constraints in each colour.
     colours: Vec<u32>,
     substeps: u32,
@@ -175,9 +177,49 @@ impl XpbdPass {
         }
     }
 
-    /// The substeps per step and the substep's size for `dt`.
-    pub(super) fn substeps(&self) -> u32 {
-        self.substeps
+    /// Writes the settings for `n` particles over a dispatch `across` threads wide: with
+    /// `external` forces on, and `dashpots` in the constraints; `decay` is the step's
+    /// exp(−μ dt).
+    pub(super) fn set(
+        &self,
+        gpu: &Gpu,
+        precision: Precision,
+        (n, across): (u32, u32),
+        settings: &ExplicitSettings,
+        (external, dashpots): (bool, bool),
+        decay: f64,
+    ) {
+        let hs = settings.dt / f64::from(self.substeps);
+        // With contact set, the ground is the contact pass's.
+        let floor = settings.ground.filter(|_| settings.contact.is_none());
+        let flags =
+            u32::from(floor.is_some()) | (u32::from(external) << 1) | (u32::from(dashpots) << 2);
+        let values = [
+            settings.gravity.x,
+            settings.gravity.y,
+            hs,
+            1.0 / hs,
+            floor.unwrap_or(0.0),
+            settings.dt,
+            1.0 / settings.dt,
+            decay,
+        ];
+        write_settings(
+            &gpu.queue,
+            &self.params,
+            precision,
+            [n, across, flags, 0],
+            &values,
+        );
+    }
+
+    /// The buffers the contact inside the substeps reads and writes.
+    pub(super) fn iterate(&self) -> Iterate<'_> {
+        Iterate {
+            pos: &self.pos,
+            prev: &self.prev,
+            heading: &self.heading,
+        }
     }
 
     /// Records one step, with `contact` inside the substeps when the scene has it.
