@@ -210,19 +210,13 @@ pub fn replace_contents(world: &mut World, params: SimParams, expanded: &Expande
 
 /// Despawns every particle and spring and sets the parameters; a new, empty solver.
 fn despawn_contents(world: &mut World, params: SimParams) {
-    let old: Vec<Entity> = world
-        .query_filtered::<Entity, Or<(With<Particle>, With<Spring>, With<PressureBody>)>>()
-        .iter(world)
-        .collect();
-    for e in old {
-        world.despawn(e);
-    }
+    despawn_all::<Or<(With<Particle>, With<Spring>, With<PressureBody>)>>(world);
     *world.resource_mut::<SimParams>() = params;
     world.insert_resource(Solver::default());
 }
 
-/// Despawns every entity that `F` selects (a scene's obstacles, its bodies).
-pub(crate) fn despawn_all<F: bevy::ecs::query::QueryFilter>(world: &mut World) {
+/// Despawns every entity that `F` selects (a scene's particles and springs, its obstacles).
+fn despawn_all<F: bevy::ecs::query::QueryFilter>(world: &mut World) {
     let old: Vec<Entity> = world.query_filtered::<Entity, F>().iter(world).collect();
     for e in old {
         world.despawn(e);

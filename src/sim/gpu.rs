@@ -542,7 +542,7 @@ pub fn run_steps_on_card(world: &mut World) {
     world.insert_resource(card);
     if !reading {
         world
-            .resource_mut::<super::schedule::StepBudget>()
+            .resource_mut::<super::budget::StepBudget>()
             .note_steps(submitted, steps);
     }
 }
@@ -635,7 +635,7 @@ fn receive(world: &mut World) -> bool {
         let taken = take_reads(world, card);
         if let Some((submit, steps)) = card.submitted.take() {
             world
-                .resource_mut::<super::schedule::StepBudget>()
+                .resource_mut::<super::budget::StepBudget>()
                 .note_steps(submit + start.elapsed(), steps);
         }
         match taken {

@@ -7,8 +7,10 @@
 //! core's passes rely on. Users change the simulation through components and resources, and
 //! read it through [`Solver`]'s accessors.
 
+mod advance;
 #[cfg(feature = "avian")]
 pub mod avian;
+mod budget;
 pub mod components;
 #[cfg(feature = "gpu")]
 pub mod gpu;
@@ -19,6 +21,7 @@ pub mod params;
 pub mod profile;
 pub mod pull;
 pub mod schedule;
+mod sets;
 pub mod solver;
 pub mod stability;
 pub(crate) mod sync;

@@ -38,7 +38,7 @@ pub use colliders::{ShapeProblem, obstacle_shapes};
 pub use exchange::Attachment;
 
 use super::params::{SimParams, SimStatus, TickPlan};
-use super::schedule::PhysicsSystems;
+use super::sets::PhysicsSystems;
 use avian2d::prelude::*;
 use bevy::math::DVec2;
 use bevy::prelude::*;
@@ -87,7 +87,7 @@ impl Plugin for HookeAvianPlugin {
                 RunFixedMainLoop,
                 one_clock
                     .in_set(bevy::app::RunFixedMainLoopSystems::BeforeFixedMainLoop)
-                    .before(super::schedule::plan_tick),
+                    .before(super::budget::plan_tick),
             )
             .add_systems(
                 FixedUpdate,
@@ -99,11 +99,6 @@ impl Plugin for HookeAvianPlugin {
                     exchange::push.in_set(AvianSystems::Push),
                 ),
             );
-        #[cfg(feature = "gpu")]
-        app.configure_sets(
-            FixedUpdate,
-            AvianSystems::Colliders.before(super::gpu::decide_device),
-        );
     }
 }
 

@@ -6,7 +6,9 @@
 //! pairs collide, the particles are pushed apart ([`super::pairs`]).
 
 use super::context::{Gpu, Precision};
-use super::kernel::{dispatch, entries, pipeline, reals, shader, write_settings};
+use super::kernel::{
+    dispatch, empty, entries, pipeline, reals, settings_buffer, shader, write_settings,
+};
 use super::settings::{ExplicitMethod, ExplicitSettings};
 use crate::solver::contact::obstacle::{MIN_THICKNESS, Placed, Shape};
 use crate::solver::contact::pairs::Pairs;
@@ -97,30 +99,25 @@ impl ContactPass {
             pipeline(device, &module, "collide"),
             pipeline(device, &module, "advance"),
         );
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("contact settings"),
-            size: 96,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let obstacles = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("obstacles"),
-            size: (OBSTACLE_REALS * precision.bytes() * count.max(1)) as u64,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let counter = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("contacts"),
-            size: 16,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let control = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("pair control"),
-            size: 4 * super::pairs::CONTROL_WORDS,
-            usage: wgpu::BufferUsages::STORAGE,
-            mapped_at_creation: false,
-        });
+        let params = settings_buffer(device, "contact settings", 96);
+        let obstacles = empty(
+            device,
+            "obstacles",
+            (OBSTACLE_REALS * precision.bytes() * count.max(1)) as u64,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        );
+        let counter = empty(
+            device,
+            "contacts",
+            16,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        );
+        let control = empty(
+            device,
+            "pair control",
+            4 * super::pairs::CONTROL_WORDS,
+            wgpu::BufferUsages::STORAGE,
+        );
         let layout = collide.get_bind_group_layout(0);
         // After the step that read `x[from]`, `v[from]`: the start velocities, and the end
         // positions and velocities it wrote.

@@ -7,7 +7,7 @@
 //! with the first vertex of each shape's run; an app finds those in its renderer's meshes.
 
 use super::context::Precision;
-use super::kernel::{entries, pipeline, shader, shape};
+use super::kernel::{empty, entries, pipeline, settings_buffer, shader, shape};
 use super::step::GpuStep;
 
 const SOURCE: &str = include_str!("draw.wgsl");
@@ -142,12 +142,7 @@ impl Painter {
     pub fn new(device: &wgpu::Device) -> Painter {
         Painter {
             pipelines: [None, None],
-            params: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("draw settings"),
-                size: 112,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }),
+            params: settings_buffer(device, "draw settings", 112),
             palette: palette_buffer(device, 1),
             palette_len: 0,
         }
@@ -253,10 +248,10 @@ impl Painter {
 }
 
 fn palette_buffer(device: &wgpu::Device, entries: usize) -> wgpu::Buffer {
-    device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("strain palette"),
-        size: (16 * entries.max(1)) as u64,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    })
+    empty(
+        device,
+        "strain palette",
+        (16 * entries.max(1)) as u64,
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+    )
 }

@@ -79,6 +79,31 @@ pub(super) fn buffer(
     })
 }
 
+/// A kernel's settings: a uniform buffer of `size` bytes, written by [`write_settings`].
+pub(super) fn settings_buffer(device: &wgpu::Device, label: &str, size: u64) -> wgpu::Buffer {
+    empty(
+        device,
+        label,
+        size,
+        wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+    )
+}
+
+/// A buffer of `size` bytes, zeroed, that a kernel or a copy fills.
+pub(super) fn empty(
+    device: &wgpu::Device,
+    label: &str,
+    size: u64,
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage,
+        mapped_at_creation: false,
+    })
+}
+
 /// Writes a kernel's settings as its WGSL `Params` lays them out: four `u32`s, then the numbers
 /// one after another in `precision` (each kernel orders its fields so that they pack so), the
 /// rest of the uniform buffer zeroed.

@@ -9,7 +9,7 @@
 //! cheaper than the reduction that would tell when it is due.
 
 use super::context::{Gpu, Precision};
-use super::kernel::{buffer, dispatch, entries, pipeline, shape};
+use super::kernel::{buffer, dispatch, empty, entries, pipeline, shape};
 use crate::solver::contact::pairs::MAX_ITERATIONS;
 
 /// Threads in a work group (the kernels' `@workgroup_size`).
@@ -95,12 +95,7 @@ impl PairPass {
         let blocks = (u64::from(table) + 1).div_ceil(u64::from(GROUP));
         let storage = wgpu::BufferUsages::STORAGE;
         let empty = |label: &str, bytes: u64| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes.max(16).next_multiple_of(16),
-                usage: storage,
-                mapped_at_creation: false,
-            })
+            empty(device, label, bytes.max(16).next_multiple_of(16), storage)
         };
         let n64 = n as u64;
         let vectors = n64 * 2 * precision.bytes() as u64;

@@ -3,6 +3,7 @@
 //! the staging buffers kept between reads (the app reads every tick).
 
 use super::context::{Gpu, GpuError};
+use super::kernel::empty;
 use std::sync::Mutex;
 use std::sync::mpsc::Receiver;
 
@@ -40,12 +41,10 @@ impl ReadBack {
         let size = total.max(8).next_multiple_of(8);
         let staging = match kept.take() {
             Some(b) if b.size() >= size => b,
-            _ => gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("read back"),
-                size,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            }),
+            _ => {
+                let usage = wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST;
+                empty(&gpu.device, "read back", size, usage)
+            }
         };
         let mut encoder = gpu
             .device

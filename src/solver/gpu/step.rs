@@ -10,8 +10,8 @@
 use super::contact::{ContactBuffers, ContactPass};
 use super::context::{Gpu, GpuError, Precision, ready};
 use super::kernel::{
-    buffer, dispatch, entries, from_bytes, pipeline, reals, shader, shape, submit, vectors,
-    write_settings,
+    buffer, dispatch, entries, from_bytes, pipeline, reals, settings_buffer, shader, shape, submit,
+    vectors, write_settings,
 };
 use super::readback::{Read, ReadBack};
 use super::settings::{ExplicitMethod, ExplicitSettings};
@@ -186,12 +186,7 @@ impl GpuStep {
             &external,
             storage | wgpu::BufferUsages::COPY_DST,
         );
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("step settings"),
-            size: 64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let params = settings_buffer(device, "step settings", 64);
         let dispatch = shape(n as u64, GROUP);
         let layout = pipeline.get_bind_group_layout(0);
         let bind = |from: usize| {

@@ -4,7 +4,10 @@
 //! every other tick it reads this.
 
 use super::context::{Gpu, Precision};
-use super::kernel::{buffer, dispatch, entries, pipeline, shader, shape, submit, write_settings};
+use super::kernel::{
+    buffer, dispatch, empty, entries, pipeline, settings_buffer, shader, shape, submit,
+    write_settings,
+};
 use crate::solver::state::Energy;
 
 /// The kernels' source, in f32.
@@ -71,18 +74,13 @@ impl SummaryPass {
         let total = pipeline(device, &module, "total");
         let dispatch = shape(u64::from(n), GROUP);
         let count = dispatch.0 * dispatch.1;
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("summary settings"),
-            size: 64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let sums = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("summary sums"),
-            size: (u64::from(count) + 1) * 4 * precision.bytes() as u64,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
+        let params = settings_buffer(device, "summary settings", 64);
+        let sums = empty(
+            device,
+            "summary sums",
+            (u64::from(count) + 1) * 4 * precision.bytes() as u64,
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        );
         let none = buffer(device, "no torn links", &[], wgpu::BufferUsages::STORAGE);
         let torn = b.torn.unwrap_or(&none);
         let layout = partials.get_bind_group_layout(0);

@@ -3,7 +3,7 @@
 //! the springs.
 
 use super::context::{Gpu, Precision};
-use super::kernel::{dispatch, entries, pipeline, shader, write_settings};
+use super::kernel::{dispatch, empty, entries, pipeline, settings_buffer, shader, write_settings};
 use super::settings::TearSettings;
 
 /// Tearing's kernel, in f32.
@@ -57,20 +57,15 @@ impl TearPass {
         let device = &gpu.device;
         let module = shader(device, &source, "hooke tear", precision);
         let pipeline = pipeline(device, &module, "tear");
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("tear settings"),
-            size: 32,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let torn = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("torn links"),
-            size: (4 * links.max(4)) as u64,
-            usage: wgpu::BufferUsages::STORAGE
+        let params = settings_buffer(device, "tear settings", 32);
+        let torn = empty(
+            device,
+            "torn links",
+            (4 * links.max(4)) as u64,
+            wgpu::BufferUsages::STORAGE
                 | wgpu::BufferUsages::COPY_SRC
                 | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        );
         let layout = pipeline.get_bind_group_layout(0);
         let bind = |at: usize| {
             device.create_bind_group(&wgpu::BindGroupDescriptor {

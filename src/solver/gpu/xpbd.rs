@@ -6,7 +6,9 @@
 
 use super::contact::{ContactPass, Iterate};
 use super::context::{Gpu, Precision};
-use super::kernel::{buffer, dispatch, entries, pipeline, reals, shader, write_settings};
+use super::kernel::{
+    buffer, dispatch, entries, pipeline, reals, settings_buffer, shader, write_settings,
+};
 use super::settings::ExplicitSettings;
 use crate::solver::methods::xpbd::coloured;
 use crate::solver::state::State;
@@ -79,12 +81,7 @@ impl XpbdPass {
             .flat_map(|k| k.iter().copied().chain([0.0]))
             .collect();
         let coef = init("xpbd coefficients", reals(&flat, precision), storage);
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("xpbd settings"),
-            size: 96,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let params = settings_buffer(device, "xpbd settings", 96);
         // The slots: colour c's first sweep at 2c, its later sweeps at 2c + 1; the first
         // substep's prediction, then the others'.
         let colours: Vec<u32> = c
