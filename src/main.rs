@@ -233,14 +233,16 @@ struct RunArgs {
     /// `--profile` then times each pass.
     #[arg(long)]
     separate_passes: bool,
-    /// Where the steps run: the CPU, or the graphics card (symplectic and explicit Euler with
-    /// obstacles, the ground's contact, dashpots and tearing; XPBD without contact; a scene
-    /// that needs more runs on the CPU, and the run says why).
+    /// Where the steps run: the CPU, or the graphics card (symplectic and explicit Euler, and
+    /// XPBD with a fixed count of sweeps, with obstacles, the ground's contact, contact between
+    /// particles, dashpots and tearing; a scene that needs more runs on the CPU, and the run
+    /// says why).
     #[arg(long, value_enum, default_value_t = runner::Device::Cpu)]
     device: runner::Device,
-    /// The card's number width with --device gpu: f32, or f64 where the adapter has it.
-    #[arg(long, value_enum, default_value_t = runner::GpuPrecision::F32)]
-    gpu_precision: runner::GpuPrecision,
+    /// The card's number width with --device gpu: f32 (the default), or f64 where the adapter
+    /// has it.
+    #[arg(long, value_enum)]
+    gpu_precision: Option<runner::GpuPrecision>,
 }
 
 /// Exit codes.
@@ -353,6 +355,17 @@ fn fail(message: impl std::fmt::Display) -> ExitCode {
 }
 
 fn run(args: RunArgs) -> ExitCode {
+    // The CPU computes in f64 whatever the flag says: a run that names a width for the card
+    // and does not go there would report figures of another precision than the one asked.
+    if let Some(p) = args
+        .gpu_precision
+        .filter(|_| args.device != runner::Device::Gpu)
+    {
+        return fail(format!(
+            "--gpu-precision {} applies to the card's steps: add --device gpu (the CPU computes in f64)",
+            p.name()
+        ));
+    }
     // A CSV the run could not write would lose the run at its end: checked before it starts.
     if let Some(Err(e)) = args.out.as_deref().map(|p| writable_file("--out", p)) {
         return fail(e);
@@ -387,7 +400,7 @@ fn run(args: RunArgs) -> ExitCode {
         profile: args.profile,
         separate_passes: args.separate_passes,
         device: args.device,
-        gpu_precision: args.gpu_precision,
+        gpu_precision: args.gpu_precision.unwrap_or_default(),
         progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
     };
     let run = match runner::run(&loaded, &overrides, duration) {
@@ -447,7 +460,7 @@ fn run(args: RunArgs) -> ExitCode {
             number(r.sim_time, 4)
         );
         if let (Some(adapter), Some(precision)) = (&r.adapter, r.precision) {
-            println!("on the GPU: {adapter}, {precision:?}");
+            println!("on the GPU: {adapter}, {}", precision.name());
         }
         // A rise on the way (a large-step method's gain, a bounce) that the end hides: the peak.
         let peak = if r.energy_max > r.energy_start + 1e-9 * r.energy_start.abs().max(1.0) {

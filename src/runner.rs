@@ -43,6 +43,16 @@ pub enum GpuPrecision {
     F64,
 }
 
+impl GpuPrecision {
+    /// The width as the flag and the JSON write it: `f32`, `f64`.
+    pub fn name(self) -> &'static str {
+        match self {
+            GpuPrecision::F32 => "f32",
+            GpuPrecision::F64 => "f64",
+        }
+    }
+}
+
 /// Overrides applied on top of the scene.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Overrides {

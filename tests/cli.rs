@@ -322,7 +322,7 @@ fn large_step_methods_report_their_iterations() {
 
 #[test]
 fn bad_flags() {
-    let cases: [(&[&str], &str); 16] = [
+    let cases: [(&[&str], &str); 18] = [
         (&["--dt", "-1"], "--dt must be finite and > 0, got -1"),
         (&["--dt", "1e19"], "--dt must be at most 1e9 s, got 1e19"),
         (
@@ -355,6 +355,15 @@ fn bad_flags() {
         (&["--integrator", "leapfrog"], "leapfrog"),
         (&["--steps", "ten"], "ten"),
         (&["--steps", "5", "--time", "1"], "cannot be used with"),
+        // A width for the card on a run that stays on the CPU (which computes in f64).
+        (
+            &["--gpu-precision", "f64"],
+            "--gpu-precision f64 applies to the card's steps: add --device gpu",
+        ),
+        (
+            &["--device", "cpu", "--gpu-precision", "f32"],
+            "--gpu-precision f32 applies to the card's steps",
+        ),
     ];
     for (flags, needle) in cases {
         let mut args = vec!["run", "--scene", "rope"];
@@ -928,6 +937,17 @@ fn run_on_the_gpu_reports_the_adapter_or_why_not() {
     assert_eq!(j["precision"], "f32");
     assert_eq!(j["steps_taken"], 100);
     assert!(j["energy_end"].as_f64().unwrap() < j["energy_start"].as_f64().unwrap());
+    // The summary names the width as the flag writes it.
+    let o = hooke(&[
+        "run", "--scene", "cloth32", "--steps", "10", "--device", "gpu",
+    ]);
+    let summary = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        summary
+            .lines()
+            .any(|l| l.starts_with("on the GPU: ") && l.ends_with(", f32")),
+        "{summary}"
+    );
     // The pile's particle pairs run on the card, and their contacts come back.
     let o = hooke(&[
         "run", "--scene", "pile", "--steps", "3000", "--device", "gpu", "--json",

@@ -5,7 +5,7 @@
 //! the time since the mark before it. The passes' own run conditions still apply, so a pass
 //! that does not run shows (almost) no time.
 
-use super::schedule::{PhysicsStep, StepSystems};
+use super::sets::{PhysicsStep, StepSystems};
 use bevy::prelude::*;
 use serde::Serialize;
 use std::time::Instant;
