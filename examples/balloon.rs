@@ -8,7 +8,7 @@
 //! little on the ground, so a little less; XPBD at its default 10 substeps of one sweep is
 //! softer than its springs' stiffness at a frame's step, so its ball is bigger), and its lowest
 //! point: a few micrometres under the ground for the explicit methods, whose ground acts on
-//! where a step starts (the course's step), and on it or above for the others.
+//! where a step starts (the course's step), and on it for the others.
 //!
 //! `cargo run --example balloon`
 

@@ -93,8 +93,9 @@ fn begin(@builtin(global_invocation_id) id: vec3<u32>) {
     heading[i] = v[i] + a * p.dt;
 }
 
-// v += hₛ f/m, p = x, x += hₛ v, with the ground as a position constraint; after the first
-// substep fused with the previous one's velocity, v = (x − p)/hₛ.
+// v += hₛ f/m, p = x, x += hₛ v, from where the last sweeps left x, put on the ground (the
+// ground as a position constraint after the sweeps); after the first substep fused with the
+// previous one's velocity, v = (x − p)/hₛ.
 @compute @workgroup_size(256)
 fn predict(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = particle(id);
@@ -114,7 +115,7 @@ fn predict(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     v[i] = vi;
     prev[i] = end;
-    pos[i] = on_ground(end + vi * p.hs, w);
+    pos[i] = end + vi * p.hs;
 }
 
 // One constraint of the slot's colour.
