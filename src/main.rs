@@ -58,6 +58,8 @@ enum Command {
 enum BenchCommand {
     /// Error against wall time for every integrator over a sweep of dt; writes CSV, a markdown
     /// table and SVG/PNG diagrams.
+    ///
+    /// About 5 minutes on 2 cores (the card's rows on a software renderer included).
     WorkPrecision {
         /// Directory to write into.
         #[arg(long, default_value = "docs/reports")]
@@ -68,6 +70,8 @@ enum BenchCommand {
     },
     /// Spring updates per second against scene size (1k to 1M springs), integrator and thread
     /// count; writes CSV and a markdown table.
+    ///
+    /// About 6 minutes on 2 cores.
     Perf {
         /// Directory to write into.
         #[arg(long, default_value = "docs/reports")]
@@ -85,6 +89,8 @@ enum BenchCommand {
     /// Loading and stepping cloths of 1 M to 16 M springs: the load's phases and peak memory
     /// per spring, and the symplectic-Euler rate against the bandwidth bound; writes CSV and
     /// a markdown table.
+    ///
+    /// About half a minute on 2 cores, with 3 GB of memory for the 16 M springs.
     Scale {
         /// Directory to write into.
         #[arg(long, default_value = "docs/reports")]
@@ -109,6 +115,8 @@ enum BenchCommand {
     /// Every method at real-time steps (dt = 1/30 to 1/960 s) on four scenes: error against a
     /// fine RK4 reference, wall time per simulated second, iterations, and the static sag
     /// against the true equilibrium; writes CSV, markdown and diagrams.
+    ///
+    /// About 5 minutes on 2 cores.
     LargeSteps {
         /// Directory to write into.
         #[arg(long, default_value = "docs/reports")]
@@ -117,6 +125,8 @@ enum BenchCommand {
     /// The shipped pile under every method at dt = 1/600, 1/240 and 1/60 s: deepest
     /// penetration, closest pair, energy gain, time to rest, cells turned and cost; writes CSV,
     /// markdown and a diagram.
+    ///
+    /// About 40 seconds on 2 cores.
     Contact {
         /// Directory to write into.
         #[arg(long, default_value = "docs/reports")]
@@ -141,6 +151,8 @@ enum BenchCommand {
     },
     /// Largest stable dt per hard scene and integrator (bisection) against the theoretical
     /// limit, and the energy change at half that dt; writes CSV and a markdown table.
+    ///
+    /// About a minute on 2 cores.
     Stability {
         /// Directory to write into.
         #[arg(long, default_value = "docs/reports")]

@@ -1,5 +1,7 @@
-//! The explicit step on the card: one WGSL kernel a step ([`explicit.wgsl`]), many steps a
-//! submit, the state read back only when asked.
+//! The step on the card ([`GpuStep`]): the state's buffers and the passes in their order (the
+//! explicit kernel, [`explicit.wgsl`], or XPBD's ([`super::xpbd`]); then the contact
+//! ([`super::contact`]) and tearing ([`super::tear`])), many steps a submit, the state read
+//! back only when asked ([`super::readback`]).
 //!
 //! The layout is the lean one: per particle its position, velocity and inverse mass (0 for a
 //! pin, so the kick needs no flag); per particle a list of its links (a spring appears in both
