@@ -12,11 +12,13 @@ mod history;
 mod input;
 mod pace;
 mod panel;
+mod parameters;
 mod pick;
 mod plots;
 mod pointer;
 mod predict;
 mod quit;
+mod readouts;
 mod stats;
 mod title;
 mod view;
@@ -49,7 +51,7 @@ impl Plugin for AppPlugin {
             .insert_resource(self.options.clone())
             .init_resource::<view::CanvasView>()
             .init_resource::<stats::LiveStats>()
-            .init_resource::<panel::PanelState>()
+            .init_resource::<parameters::PanelState>()
             .init_resource::<actions::SceneList>()
             .init_resource::<history::History>()
             .init_resource::<pick::Picking>()
