@@ -29,13 +29,7 @@ pub fn collider(def: &BodyDef) -> Result<avian2d::prelude::Collider, String> {
 #[cfg(feature = "avian")]
 pub fn replace_bodies(world: &mut World, bodies: &[BodyDef], gravity: DVec2) {
     use avian2d::prelude::*;
-    let old: Vec<Entity> = (world
-        .query_filtered::<Entity, With<RigidBody>>()
-        .iter(world))
-    .collect();
-    for e in old {
-        world.despawn(e);
-    }
+    super::despawn::despawn_all::<With<RigidBody>>(world);
     // One gravity for both engines from the start (the coupling keeps them one after).
     if let Some(mut g) = world.get_resource_mut::<Gravity>() {
         g.0 = gravity.as_vec2();

@@ -1,5 +1,6 @@
 //! Reading scene files and putting scenes into a Bevy world.
 
+use super::despawn::despawn_all;
 use super::format::{Actuation, ParticleDef, Plasticity, PressureDef, Scene, SpringDef};
 use super::generate::Expanded;
 use super::reserve::Reserved;
@@ -213,14 +214,6 @@ fn despawn_contents(world: &mut World, params: SimParams) {
     despawn_all::<Or<(With<Particle>, With<Spring>, With<PressureBody>)>>(world);
     *world.resource_mut::<SimParams>() = params;
     world.insert_resource(Solver::default());
-}
-
-/// Despawns every entity that `F` selects (a scene's particles and springs, its obstacles).
-fn despawn_all<F: bevy::ecs::query::QueryFilter>(world: &mut World) {
-    let old: Vec<Entity> = world.query_filtered::<Entity, F>().iter(world).collect();
-    for e in old {
-        world.despawn(e);
-    }
 }
 
 /// Despawns every obstacle and spawns the scene's, in its order.

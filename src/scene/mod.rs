@@ -2,6 +2,7 @@
 
 pub mod bodies;
 mod builtin;
+mod despawn;
 pub mod format;
 pub mod generate;
 pub mod load;
