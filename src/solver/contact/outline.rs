@@ -408,7 +408,8 @@ impl Outlines {
 
     /// Pushes the candidates apart in the state's positions until the deepest is under 1 % of
     /// `contact` (at most `passes` passes), then the velocity pass; the obstacles' corners the
-    /// same way, their impulses noted in `reactions`. `velocity_follows: Some(dt)` adds the push over dt to the velocities.
+    /// same way, their impulses noted in `reactions`. `velocity_follows: Some(dt)` adds the
+    /// push over dt to the velocities.
     /// Returns the contacts of the first pass.
     pub(crate) fn collide(
         &self,

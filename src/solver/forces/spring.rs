@@ -29,8 +29,8 @@ pub(crate) fn one_spring_energy(s: &PackedSpring, x: &[DVec2]) -> f64 {
     0.5 * s.k * stretch * stretch
 }
 
-/// [`super::kernels::spring_energy`]'s eight running sums and the springs past the last eight, added in one
-/// order for both of its forms.
+/// [`super::kernels::spring_energy`]'s eight running sums and the springs past the last
+/// eight, added in one order for both of its forms.
 #[inline(always)]
 pub(crate) fn energy_total(sums: [f64; 8], tail: &[PackedSpring], x: &[DVec2]) -> f64 {
     let s: [f64; 4] = std::array::from_fn(|i| sums[i] + sums[i + 4]);
