@@ -355,7 +355,8 @@ pub fn integrate(
         Integrator::VelocityVerlet => velocity_verlet(s, &mut w.scratch, dt, g, threads),
         Integrator::Rk4 => rk4(s, &mut w.scratch, dt, g, threads),
         Integrator::ImplicitEuler => {
-            implicit_euler(s, &mut w.scratch, dt, m.cg, it.newton, g, contact, threads)
+            let held = (contact, m.ground);
+            implicit_euler(s, &mut w.scratch, dt, m.cg, it.newton, g, held, threads)
         }
         Integrator::ProjectiveDynamics => {
             let pd = &mut w.projective;
@@ -385,9 +386,10 @@ pub fn integrate(
 /// The shipped `soft_box` at 1/60 s ended at 47 % of its height under projective dynamics and
 /// 39 % under BDF2, tangled, and a gas ball resting on the ground under VBD at its default 10
 /// iterations settled at 64 % of its area (`docs/integrators.md`, pass 4). XPBD's substeps
-/// already clamp the ground inside its solve; implicit Euler keeps the clamp, since its
-/// contact in the solve tangled that box (42 of its 98 triangles turned at 1/60 s, none with the
-/// clamp).
+/// already clamp the ground inside its solve, and implicit Euler holds it in its linear solves
+/// by its own means (`methods/implicit_euler/ground.rs`): its contact in the solve, a
+/// projection after each Newton step, tangled that box (42 of its 98 triangles turned at 1/60
+/// s).
 fn holds_bare_ground(integrator: Integrator) -> bool {
     matches!(
         integrator,

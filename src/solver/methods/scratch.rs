@@ -80,6 +80,12 @@ pub struct Cg {
     pub(super) z: Vec<DVec2>,
     /// Per particle: the inverse of its diagonal block of A (the preconditioner).
     pub(super) diag: Vec<Sym2>,
+    /// Per particle: which components of Δv the solve may change ([`super::implicit_euler`]'s
+    /// row filter), and the filter of the pins alone.
+    pub(super) filter: Vec<DVec2>,
+    pub(super) pins: Vec<DVec2>,
+    /// The right-hand side, kept while the ground's solves overwrite `z`.
+    pub(super) b: Vec<DVec2>,
     /// Per spring: its block of the stiffness matrix at the start of the step.
     pub(super) blocks: Vec<Block>,
     /// The threaded K u's split of the blocks.

@@ -1,34 +1,21 @@
 //! Implicit (backward) Euler: Newton's steps on M (v − v0) = h f(x0 + h v), each linear solve
 //! by block-Jacobi-preconditioned conjugate gradients on the pool's threads. It computes the
 //! end-of-step velocity v1 from the start-of-step state; the position update follows in the
-//! step's drift pass ([`crate::solver::step`]).
+//! step's drift pass ([`crate::solver::step`]). Beside this file: the linear solve with its
+//! row filter ([`cg`]) and the ground held inside it ([`ground`]).
+
+mod cg;
+mod ground;
+
+pub use cg::CgSettings;
 
 use super::evaluate::forces_at;
 use super::scratch::Scratch;
 use crate::solver::contact::inside::InSolve;
-use crate::solver::forces::stiffness::{self, Sym2};
+use crate::solver::forces::stiffness;
 use crate::solver::state::State;
-use crate::solver::threads::{SpringBuffers, Threads};
+use crate::solver::threads::Threads;
 use glam::DVec2;
-
-/// Settings of the implicit Euler solve (the Bevy layer's resource is
-/// [`crate::sim::CgSettings`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CgSettings {
-    /// Stop when |r| <= tolerance · |b| (relative residual of the linear system).
-    pub tolerance: f64,
-    /// Stop after this many iterations whatever the residual.
-    pub max_iterations: u32,
-}
-
-impl Default for CgSettings {
-    fn default() -> Self {
-        CgSettings {
-            tolerance: 1e-8,
-            max_iterations: 500,
-        }
-    }
-}
 
 /// Newton steps at least, when contact is kept inside the solve: with one, the step is a solve
 /// and then a projection of its end, and the learned contact forces never reach a solve. On
@@ -49,7 +36,9 @@ pub const CONTACT_NEWTON: u32 = 4;
 /// with the transverse term of compressed springs dropped (coefficient max(0, 1 − L/l)), which
 /// keeps M − h² K symmetric positive definite; the residual is exact, so the iteration still
 /// converges to the exact step, only the rate changes. Pinned particles are held (their rows
-/// are projected out). K u and the vector updates share the solver threads like the explicit
+/// are projected out), and so is the vertical row of a particle that `ground`, the ground
+/// without contact settings, holds ([`ground`]); `contact` is the rest of contact, kept by
+/// projections after each Newton step. K u and the vector updates share the solver threads like the explicit
 /// passes; the reductions sum per chunk, so the thread count changes the result by round-off.
 #[allow(clippy::too_many_arguments)]
 pub fn implicit_euler(
@@ -59,7 +48,7 @@ pub fn implicit_euler(
     settings: CgSettings,
     newton: u32,
     gravity: DVec2,
-    contact: Option<&InSolve>,
+    (contact, ground): (Option<&InSolve>, Option<f64>),
     threads: &Threads,
 ) {
     let n = s.x.len();
@@ -114,7 +103,7 @@ pub fn implicit_euler(
         |a, b| a + b,
     );
     let linear = (h2, b_norm2.element_sum(), settings);
-    newton_step(s, sc, dt, linear, contact, threads);
+    newton_step(s, sc, dt, linear, (contact, ground), threads);
     if newton > 1 {
         // The first step's Δv warm-starts the next time step's first solve.
         let sc = &mut *sc;
@@ -170,7 +159,7 @@ pub fn implicit_euler(
             |a, b| a + b,
         );
         let linear = (h2, b_norm2.element_sum(), settings);
-        newton_step(s, sc, dt, linear, contact, threads);
+        newton_step(s, sc, dt, linear, (contact, ground), threads);
     }
     let sc = &mut *sc;
     if let Some(c) = contact {
@@ -191,11 +180,20 @@ fn newton_step(
     sc: &mut Scratch,
     dt: f64,
     (h2, b_norm2, settings): (f64, f64, CgSettings),
-    contact: Option<&InSolve>,
+    (contact, ground): (Option<&InSolve>, Option<f64>),
     threads: &Threads,
 ) {
     let b_norm2 = with_support(s, sc, dt, contact, b_norm2);
-    solve(s, sc, h2, b_norm2, settings, threads);
+    match (contact, ground) {
+        (None, Some(ground)) => {
+            ground::solve_on_ground(s, sc, (dt, h2), b_norm2, settings, ground, threads)
+        }
+        _ => {
+            cg::unfiltered(&mut sc.cg.filter, &s.inv_mass);
+            cg::solve(s, sc, h2, b_norm2, settings, threads);
+            cg::add_to_velocities(s, &sc.cg.dv, threads);
+        }
+    }
     if let Some(c) = contact {
         hold_to_contact(s, sc, dt, c);
     }
@@ -247,166 +245,4 @@ fn hold_to_contact(s: &mut State, sc: &mut Scratch, dt: f64, c: &InSolve) {
             s.v[i] = (sc.x[i] - s.x[i]) * inv_h;
         }
     }
-}
-
-/// Solves (M − h² K) dv = b by preconditioned CG, K the blocks in `cg.blocks`, b in `cg.z`
-/// (|b|² = `b_norm2`), from the start in `cg.dv`, counts the iterations, and adds the solution
-/// to the velocities.
-fn solve(
-    s: &mut State,
-    sc: &mut Scratch,
-    h2: f64,
-    b_norm2: f64,
-    settings: CgSettings,
-    threads: &Threads,
-) {
-    let springs = s.springs.len();
-    let cg = &mut sc.cg;
-    let sum_pairs = |a: (DVec2, DVec2), b: (DVec2, DVec2)| (a.0 + b.0, a.1 + b.1);
-
-    // The preconditioner: the inverse of each particle's 2×2 diagonal block of A = M − h² K
-    // (block Jacobi; a particle's springs pull it along their directions, which a scalar
-    // diagonal cannot express).
-    for (d, &m) in cg.diag.iter_mut().zip(&s.mass) {
-        *d = Sym2::scaled_identity(m);
-    }
-    for block in &cg.blocks {
-        cg.diag[block.a as usize].add_scaled(block.m, h2);
-        cg.diag[block.b as usize].add_scaled(block.m, h2);
-    }
-    sc.gas.add_diagonal(&mut cg.diag, h2);
-    threads.each(springs, (&mut cg.diag[..], &s.inv_mass[..]), |(diag, w)| {
-        for (d, &w) in diag.iter_mut().zip(w) {
-            *d = if w != 0.0 {
-                d.inverse_or_zero()
-            } else {
-                Sym2::default()
-            };
-        }
-    });
-    // r = b − A dv (warm start), pinned rows held at 0.
-    threads.each(springs, (&mut cg.dv[..], &s.inv_mass[..]), |(dv, w)| {
-        for (dv, &w) in dv.iter_mut().zip(w) {
-            if w == 0.0 {
-                *dv = DVec2::ZERO;
-            }
-        }
-    });
-    // out = A u; returns u · A u.
-    let gas = &sc.gas;
-    let a_times = |out: &mut [DVec2], u: &[DVec2], buffers: &mut SpringBuffers, blocks| {
-        stiffness::apply_threaded(threads, buffers, out, u, blocks);
-        gas.add_product(u, out);
-        apply_a(threads, springs, out, u, &s.mass, &s.inv_mass, h2)
-    };
-    a_times(&mut cg.ap, &cg.dv, &mut cg.buffers, &cg.blocks);
-    let data = (
-        &mut cg.r[..],
-        &mut cg.z[..],
-        &mut cg.p[..],
-        &cg.ap[..],
-        &cg.diag[..],
-    );
-    let (r2, rz) = threads.chunked(
-        springs,
-        data,
-        |(r, z, p, ap, d)| {
-            let (mut r2, mut rz) = (DVec2::ZERO, DVec2::ZERO);
-            for i in 0..r.len() {
-                r[i] = z[i] - ap[i]; // z holds b
-                z[i] = d[i].times(r[i]);
-                p[i] = z[i];
-                r2 += r[i] * r[i];
-                rz += r[i] * z[i];
-            }
-            (r2, rz)
-        },
-        sum_pairs,
-    );
-    let tol2 = settings.tolerance * settings.tolerance * b_norm2;
-    let (mut r2, mut rz) = (r2.element_sum(), rz.element_sum());
-    let mut iterations = 0;
-    while r2 > tol2 && iterations < settings.max_iterations {
-        let pap = a_times(&mut cg.ap, &cg.p, &mut cg.buffers, &cg.blocks);
-        if !pap.is_finite() || pap <= 0.0 {
-            break; // not positive definite along p, or non-finite: stop with what we have
-        }
-        let alpha = rz / pap;
-        // Reductions in two lanes (x and y): a scalar sum is one long chain of additions.
-        let data = (
-            &mut cg.dv[..],
-            &mut cg.r[..],
-            &mut cg.z[..],
-            &cg.p[..],
-            &cg.ap[..],
-            &cg.diag[..],
-        );
-        let (r2_lanes, rz_lanes) = threads.chunked(
-            springs,
-            data,
-            |(dv, r, z, p, ap, d)| {
-                let (mut r2, mut rz) = (DVec2::ZERO, DVec2::ZERO);
-                for i in 0..dv.len() {
-                    dv[i] += p[i] * alpha;
-                    r[i] -= ap[i] * alpha;
-                    z[i] = d[i].times(r[i]);
-                    r2 += r[i] * r[i];
-                    rz += r[i] * z[i];
-                }
-                (r2, rz)
-            },
-            sum_pairs,
-        );
-        r2 = r2_lanes.element_sum();
-        let rz_new = rz_lanes.element_sum();
-        let beta = rz_new / rz;
-        rz = rz_new;
-        threads.each(springs, (&mut cg.p[..], &cg.z[..]), |(p, z)| {
-            for (p, z) in p.iter_mut().zip(z) {
-                *p = *z + *p * beta;
-            }
-        });
-        iterations += 1;
-    }
-    cg.iterations += iterations as u64;
-    cg.last_iterations = iterations;
-    if r2 > tol2 {
-        cg.unconverged += 1;
-    }
-    threads.each(springs, (&mut s.v[..], &cg.dv[..]), |(v, dv)| {
-        for (v, dv) in v.iter_mut().zip(dv) {
-            *v += *dv;
-        }
-    });
-}
-
-/// ap = A u = M u + dt² K u from ap = K u (K the positive semi-definite stiffness), pinned rows
-/// held at 0; returns u · A u.
-fn apply_a(
-    threads: &Threads,
-    springs: usize,
-    ap: &mut [DVec2],
-    u: &[DVec2],
-    mass: &[f64],
-    inv_mass: &[f64],
-    h2: f64,
-) -> f64 {
-    let dot = threads.chunked(
-        springs,
-        (ap, u, mass, inv_mass),
-        |(ap, u, m, w)| {
-            let mut dot = DVec2::ZERO;
-            for i in 0..ap.len() {
-                ap[i] = if w[i] != 0.0 {
-                    u[i] * m[i] + ap[i] * h2
-                } else {
-                    DVec2::ZERO
-                };
-                dot += u[i] * ap[i];
-            }
-            dot
-        },
-        |a, b| a + b,
-    );
-    dot.element_sum()
 }
