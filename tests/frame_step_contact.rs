@@ -484,7 +484,7 @@ fn two_thrown_rings_bounce_apart() {
     assert!(left > 0.0 && right < 0.0, "{left} {right}");
 }
 
-/// Implicit Euler on the pile at 1/60 s: short of the pile's other checks (pairs reach 77 % of
+/// Implicit Euler on the pile at 1/60 s: short of the pile's other checks (pairs reach 69 % of
 /// 2r), but its energy never rises above the start and nothing ends inside a surface.
 #[test]
 fn implicit_euler_keeps_the_piles_energy_at_a_frames_step() {

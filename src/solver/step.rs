@@ -65,7 +65,7 @@ use super::method::{Integrator, Iterations};
 use super::methods::bdf2::{self, Bdf2};
 use super::methods::evaluate::{self, forces_at};
 use super::methods::explicit::{rk4, velocity_verlet};
-use super::methods::implicit_euler::{CgSettings, implicit_euler};
+use super::methods::implicit_euler::{CgSettings, Ground, implicit_euler};
 use super::methods::projective::{self, FactorOrder, Projective};
 use super::methods::scratch::Scratch;
 use super::methods::vbd::{self, Vbd};
@@ -355,7 +355,7 @@ pub fn integrate(
         Integrator::VelocityVerlet => velocity_verlet(s, &mut w.scratch, dt, g, threads),
         Integrator::Rk4 => rk4(s, &mut w.scratch, dt, g, threads),
         Integrator::ImplicitEuler => {
-            let held = (contact, m.ground);
+            let held = (contact, held_ground(m.ground, contact));
             implicit_euler(s, &mut w.scratch, dt, m.cg, it.newton, g, held, threads)
         }
         Integrator::ProjectiveDynamics => {
@@ -395,6 +395,20 @@ fn holds_bare_ground(integrator: Integrator) -> bool {
         integrator,
         Integrator::ProjectiveDynamics | Integrator::Bdf2 | Integrator::Vbd
     )
+}
+
+/// The ground implicit Euler holds in its linear solves (`methods/implicit_euler/ground.rs`):
+/// with contact set, the contact's, at its height plus the radius and with its friction (the
+/// contact's projection keeps it too); otherwise the bare ground, frictionless as the clamp
+/// is, whether or not obstacles bring contact into the solve.
+fn held_ground(ground: Option<f64>, contact: Option<&InSolve>) -> Option<Ground> {
+    match contact.and_then(InSolve::ground) {
+        Some((height, friction)) => Some(Ground { height, friction }),
+        None => ground.map(|height| Ground {
+            height,
+            friction: 0.0,
+        }),
+    }
 }
 
 /// The strongest body-force acceleration: with the fastest particle, how far two particles

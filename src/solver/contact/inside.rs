@@ -117,6 +117,12 @@ impl<'a> InSolve<'a> {
         }
     }
 
+    /// The ground as this contact holds particles on it: its height plus the radius, and the
+    /// friction coefficient.
+    pub(crate) fn ground(&self) -> Option<(f64, f64)> {
+        self.ground.map(|g| (g + self.radius, self.friction))
+    }
+
     /// Whether this contact could act on any particle of `x`: always, but for the ground
     /// alone, which acts only on a particle under its height plus the radius. A solve whose
     /// iterate nothing reaches can leave the contact's bookkeeping aside ([`Support`]), since

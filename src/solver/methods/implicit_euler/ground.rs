@@ -1,16 +1,18 @@
-//! The ground without contact settings, held inside implicit Euler's linear solves. Clamped
-//! only after the solve, a body pressed onto the ground at a frame's step went through it in
-//! each solve and was lifted back by the clamp, which a gas body paid back as energy: a gas
-//! ball at 1/30 s rose from 73 J to 151 J and still moved at 0.8 m/s after 10 s
-//! (`docs/performance-log.md`, 2026-12-06).
+//! The ground held inside implicit Euler's linear solves. Clamped only after the solve (or,
+//! with contact set, projected after each Newton step), a body pressed onto the ground at a
+//! frame's step went through it in each solve and was lifted back, which a gas body paid back
+//! as energy: a gas ball at 1/30 s rose from 73 J to 151 J and still moved at 0.8 m/s after
+//! 10 s (148 J with contact set; `docs/performance-log.md`, 2026-12-06).
 //!
 //! Here a particle whose end x0 + h v would lie at or under the ground has its vertical
-//! velocity set to end on it, and that row filtered out of the solve ([`super::cg`]); the
-//! ground is frictionless, as the clamp is. Which particles it holds is settled by an active
-//! set, a few solves at most: a held particle lets go when the ground would have to pull it
-//! down (its row's constraint impulse, (A Δv − b)_y, is negative), and a free one that the
-//! solve put under the ground is held. The step's clamp (pass 4) still takes whatever the last
-//! solve left under it.
+//! velocity set to end on it, and that row filtered out of the solve ([`super::cg`]). Which
+//! particles it holds is settled by an active set, a few solves at most: a held particle lets
+//! go when the ground would have to pull it down (its row's constraint impulse,
+//! (A Δv − b)_y, is negative), and a free one that the solve put under the ground is held.
+//! Without contact settings the ground is frictionless, as the step's clamp (pass 4) is, and
+//! the clamp still takes whatever the last solve left under it. With contact set the ground is
+//! the contact's, at its radius, still kept by the projection too, and its friction is
+//! Coulomb's from the held rows' impulses ([`rub`]).
 
 use super::cg::{CgSettings, FREE, HELD, add_to_velocities, solve, times_a, unfiltered};
 use crate::solver::methods::scratch::Scratch;
@@ -18,11 +20,22 @@ use crate::solver::state::State;
 use crate::solver::threads::Threads;
 use glam::DVec2;
 
-/// The most solves a Newton step takes to settle which particles the ground holds. Most steps
-/// need one: of the gas ball's 300 steps at 1/30 s, 296 took one solve, 3 two and 1 three
-/// (its landing); of a 128 × 128 cloth's first 60 at 1/60 s, landing flat, 39 one, 17 two and
-/// 4 three (2026-12-06, Intel Xeon). What the last solve leaves under the ground, the clamp
-/// takes.
+/// The ground the solves hold particles on: its height (plus the contact radius, with contact
+/// set) and its friction coefficient (0 without contact settings, as the clamp has none).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ground {
+    pub height: f64,
+    pub friction: f64,
+}
+
+/// The most solves a Newton step takes to settle which particles the ground holds. Without
+/// contact most steps need one: of the gas ball's 300 steps at 1/30 s, 296 took one solve, 3 two
+/// and 1 three (its landing); of a 128 × 128 cloth's first 60 at 1/60 s, landing flat, 39 one,
+/// 17 two and 4 three. On the shipped pile at 1/60 s (contact set, pairs) most take two: 70
+/// Newton steps one, 1,036 two, 331 three and 3 four. Capped at one solve, the pile rose from
+/// 181 J to 224 J at 1/60 s and `folding_cloth` from 8.8 J to 1,169 J; capped at two,
+/// `folding_cloth` at 1/30 s reached 167 J, against 88 J at four (2026-12-06, Intel Xeon).
+/// What the last solve leaves under the ground, the clamp or the projection takes.
 const ROUNDS: u32 = 4;
 
 /// How far above the ground an iterate may end and still count as on it: a held particle's
@@ -37,9 +50,10 @@ pub(super) fn solve_on_ground(
     (dt, h2): (f64, f64),
     b_norm2: f64,
     settings: CgSettings,
-    ground: f64,
+    ground: Ground,
     threads: &Threads,
 ) {
+    let ground = ground.height;
     let n = s.x.len();
     let cg = &mut sc.cg;
     cg.b.clear();
@@ -115,4 +129,34 @@ fn settle(
         }
     }
     changed
+}
+
+/// Coulomb friction on the particles the ground held in the last solve (its right-hand side in
+/// `cg.b`, its solution in `cg.dv`), after the step's last Newton step: each one's horizontal
+/// velocity slowed toward 0 by up to μ j / m, j the ground's push over the step,
+/// (A Δv − b)_y. The contact's projection rubs only what it pushes, and the particles held
+/// here end on the ground, where it pushes nothing.
+pub(super) fn rub(s: &mut State, sc: &mut Scratch, h2: f64, friction: f64, threads: &Threads) {
+    let cg = &mut sc.cg;
+    if friction == 0.0 || !cg.filter.contains(&HELD) {
+        return;
+    }
+    let matrix = (&*s, &sc.gas, &cg.blocks[..]);
+    times_a(
+        threads,
+        matrix,
+        &mut cg.buffers,
+        &mut cg.ap,
+        &cg.dv,
+        &cg.pins,
+        h2,
+    );
+    for i in 0..s.x.len() {
+        if cg.filter[i] == HELD {
+            let push = (cg.ap[i].y - cg.b[i].y).max(0.0);
+            let slowed = friction * push * s.inv_mass[i];
+            let v = &mut s.v[i].x;
+            *v = v.signum() * (v.abs() - slowed).max(0.0);
+        }
+    }
 }

@@ -8,6 +8,7 @@ mod cg;
 mod ground;
 
 pub use cg::CgSettings;
+pub use ground::Ground;
 
 use super::evaluate::forces_at;
 use super::scratch::Scratch;
@@ -21,7 +22,8 @@ use glam::DVec2;
 /// and then a projection of its end, and the learned contact forces never reach a solve. On
 /// the shipped pile at 1/60 s (2-core AMD EPYC, 2026-12-04): with 1, pairs closed to 49 % of 2r
 /// and the energy rose from 181 J to 248 J; with 4, pairs at 77 % of 2r or more and the energy
-/// never above its start (8 did no better: 72 %).
+/// never above its start (8 did no better: 72 %). With the ground held in the solves too
+/// ([`ground`]; 2026-12-06, Intel Xeon), 4 leave pairs at 69 % and no cell turned.
 pub const CONTACT_NEWTON: u32 = 4;
 
 /// Backward Euler by Newton's method on M (v − v0) = h f(x0 + h v), `newton` steps, each linear
@@ -36,10 +38,11 @@ pub const CONTACT_NEWTON: u32 = 4;
 /// with the transverse term of compressed springs dropped (coefficient max(0, 1 − L/l)), which
 /// keeps M − h² K symmetric positive definite; the residual is exact, so the iteration still
 /// converges to the exact step, only the rate changes. Pinned particles are held (their rows
-/// are projected out), and so is the vertical row of a particle that `ground`, the ground
-/// without contact settings, holds ([`ground`]); `contact` is the rest of contact, kept by
-/// projections after each Newton step. K u and the vector updates share the solver threads like the explicit
-/// passes; the reductions sum per chunk, so the thread count changes the result by round-off.
+/// are projected out), and so is the vertical row of a particle that `ground` holds
+/// ([`ground`]: the bare ground, or the contact's); `contact` (obstacles, pairs, the ground
+/// with contact set) is kept by projections after each Newton step. K u and the vector
+/// updates share the solver threads like the explicit passes; the reductions sum per chunk,
+/// so the thread count changes the result by round-off.
 #[allow(clippy::too_many_arguments)]
 pub fn implicit_euler(
     s: &mut State,
@@ -48,7 +51,7 @@ pub fn implicit_euler(
     settings: CgSettings,
     newton: u32,
     gravity: DVec2,
-    (contact, ground): (Option<&InSolve>, Option<f64>),
+    (contact, ground): (Option<&InSolve>, Option<Ground>),
     threads: &Threads,
 ) {
     let n = s.x.len();
@@ -165,6 +168,9 @@ pub fn implicit_euler(
     if let Some(c) = contact {
         sc.support.note_reactions(c, &s.mass, dt);
     }
+    if let Some(g) = ground {
+        ground::rub(s, sc, h2, g.friction, threads);
+    }
     if newton > 1 {
         sc.cg.dv.copy_from_slice(&sc.sum_u);
     }
@@ -180,28 +186,28 @@ fn newton_step(
     sc: &mut Scratch,
     dt: f64,
     (h2, b_norm2, settings): (f64, f64, CgSettings),
-    (contact, ground): (Option<&InSolve>, Option<f64>),
+    (contact, ground): (Option<&InSolve>, Option<Ground>),
     threads: &Threads,
 ) {
     let b_norm2 = with_support(s, sc, dt, contact, b_norm2);
-    match (contact, ground) {
-        (None, Some(ground)) => {
+    match ground {
+        Some(ground) => {
             ground::solve_on_ground(s, sc, (dt, h2), b_norm2, settings, ground, threads)
         }
-        _ => {
+        None => {
             cg::unfiltered(&mut sc.cg.filter, &s.inv_mass);
             cg::solve(s, sc, h2, b_norm2, settings, threads);
             cg::add_to_velocities(s, &sc.cg.dv, threads);
         }
     }
     if let Some(c) = contact {
-        hold_to_contact(s, sc, dt, c);
+        hold_to_contact(s, sc, dt, c, ground);
     }
 }
 
-/// The contact forces carried from the last solves ([`crate::solver::contact::inside::Support`]) added to the right-hand side
-/// in `sc.cg.z` as their impulse over dt (free particles only); returns |b|², anew when they
-/// are there.
+/// The contact forces carried from the last solves
+/// ([`crate::solver::contact::inside::Support`]) added to the right-hand side in `sc.cg.z` as
+/// their impulse over dt (free particles only); returns |b|², anew when they are there.
 fn with_support(
     s: &State,
     sc: &mut Scratch,
@@ -228,8 +234,10 @@ fn with_support(
 
 /// Contact inside the solve: the end positions x0 + h v that the Newton step found, kept out of
 /// the surfaces and the other particles ([`InSolve`]), and the velocity set to where they
-/// went, so that the next Newton step linearises where contact holds the particles.
-fn hold_to_contact(s: &mut State, sc: &mut Scratch, dt: f64, c: &InSolve) {
+/// went, so that the next Newton step linearises where contact holds the particles. An
+/// obstacle's push may put a particle under a bare ground that the solve held ([`ground`]): it
+/// goes back onto it, as the clamp would.
+fn hold_to_contact(s: &mut State, sc: &mut Scratch, dt: f64, c: &InSolve, ground: Option<Ground>) {
     let n = s.x.len();
     sc.x.resize(n, DVec2::ZERO);
     sc.contact.resize(c.pair_scratch(), DVec2::ZERO);
@@ -240,8 +248,10 @@ fn hold_to_contact(s: &mut State, sc: &mut Scratch, dt: f64, c: &InSolve) {
     sc.support
         .project(c, &mut sc.x, &s.x, m, w, scratch, 1.0 / (dt * dt));
     let inv_h = 1.0 / dt;
+    let floor = ground.map_or(f64::NEG_INFINITY, |g| g.height);
     for i in 0..n {
         if s.inv_mass[i] != 0.0 {
+            sc.x[i].y = sc.x[i].y.max(floor);
             s.v[i] = (sc.x[i] - s.x[i]) * inv_h;
         }
     }
