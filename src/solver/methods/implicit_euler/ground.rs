@@ -101,21 +101,11 @@ fn settle(
     ground: f64,
     threads: &Threads,
 ) -> bool {
+    if sc.cg.filter.contains(&HELD) {
+        impulses(s, sc, h2, threads);
+    }
     let cg = &mut sc.cg;
     let mut changed = false;
-    if cg.filter.contains(&HELD) {
-        // The constraint impulses: (A Δv − b) in the held rows, A's rows unfiltered there.
-        let matrix = (s, &sc.gas, &cg.blocks[..]);
-        times_a(
-            threads,
-            matrix,
-            &mut cg.buffers,
-            &mut cg.ap,
-            &cg.dv,
-            &cg.pins,
-            h2,
-        );
-    }
     for i in 0..s.x.len() {
         let f = &mut cg.filter[i];
         if *f == HELD {
@@ -137,20 +127,11 @@ fn settle(
 /// (A Δv − b)_y. The contact's projection rubs only what it pushes, and the particles held
 /// here end on the ground, where it pushes nothing.
 pub(super) fn rub(s: &mut State, sc: &mut Scratch, h2: f64, friction: f64, threads: &Threads) {
-    let cg = &mut sc.cg;
-    if friction == 0.0 || !cg.filter.contains(&HELD) {
+    if friction == 0.0 || !sc.cg.filter.contains(&HELD) {
         return;
     }
-    let matrix = (&*s, &sc.gas, &cg.blocks[..]);
-    times_a(
-        threads,
-        matrix,
-        &mut cg.buffers,
-        &mut cg.ap,
-        &cg.dv,
-        &cg.pins,
-        h2,
-    );
+    impulses(s, sc, h2, threads);
+    let cg = &sc.cg;
     for i in 0..s.x.len() {
         if cg.filter[i] == HELD {
             let push = (cg.ap[i].y - cg.b[i].y).max(0.0);
@@ -159,4 +140,13 @@ pub(super) fn rub(s: &mut State, sc: &mut Scratch, h2: f64, friction: f64, threa
             *v = v.signum() * (v.abs() - slowed).max(0.0);
         }
     }
+}
+
+/// A Δv into `cg.ap` with the held rows unfiltered, so that (A Δv − b)_y in a held row is the
+/// ground's push on that particle over the step (its constraint impulse, N·s).
+fn impulses(s: &State, sc: &mut Scratch, h2: f64, threads: &Threads) {
+    let cg = &mut sc.cg;
+    let matrix = (s, &sc.gas, &cg.blocks[..]);
+    let (out, dv, pins) = (&mut cg.ap, &cg.dv, &cg.pins);
+    times_a(threads, matrix, &mut cg.buffers, out, dv, pins, h2);
 }
