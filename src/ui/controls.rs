@@ -71,7 +71,11 @@ pub fn controls_grid(ui: &mut egui::Ui, id: &str) {
 }
 
 /// The overlay, over the canvas.
-pub fn help_overlay(mut contexts: EguiContexts, mut help: ResMut<HelpOverlay>) -> Result {
+pub fn help_overlay(
+    mut contexts: EguiContexts,
+    mut help: ResMut<HelpOverlay>,
+    view: Res<super::view::CanvasView>,
+) -> Result {
     if !help.0 {
         return Ok(());
     }
@@ -81,7 +85,7 @@ pub fn help_overlay(mut contexts: EguiContexts, mut help: ResMut<HelpOverlay>) -
         .open(&mut open)
         .collapsible(false)
         .resizable(false)
-        .anchor(egui::Align2::CENTER_CENTER, [140.0, 0.0])
+        .anchor(egui::Align2::CENTER_CENTER, [view.canvas_offset(), 0.0])
         .show(ctx, |ui| {
             controls_grid(ui, "help-controls");
             ui.small("H or ? closes this.");
@@ -107,6 +111,7 @@ pub fn empty_canvas_hint(
     obstacles: Res<crate::sim::Obstacles>,
     help: Res<HelpOverlay>,
     over: Res<super::drop::FilesOver>,
+    view: Res<super::view::CanvasView>,
 ) -> Result {
     let empty = particles.is_empty() && built.is_empty() && obstacles.placed().is_empty();
     if !empty || help.0 || !over.0.is_empty() {
@@ -114,7 +119,7 @@ pub fn empty_canvas_hint(
     }
     let ctx = contexts.ctx_mut()?;
     egui::Area::new(egui::Id::new("empty-canvas-hint"))
-        .anchor(egui::Align2::CENTER_BOTTOM, [140.0, -120.0])
+        .anchor(egui::Align2::CENTER_BOTTOM, [view.canvas_offset(), -120.0])
         .order(egui::Order::Background)
         .interactable(false)
         .show(ctx, |ui| {

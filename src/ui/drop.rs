@@ -73,14 +73,18 @@ pub fn what_a_drop_does(files: &[PathBuf]) -> (String, bool) {
 }
 
 /// The line, over the canvas's middle, while files hover.
-pub fn drop_hint(mut contexts: EguiContexts, over: Res<FilesOver>) -> Result {
+pub fn drop_hint(
+    mut contexts: EguiContexts,
+    over: Res<FilesOver>,
+    view: Res<super::view::CanvasView>,
+) -> Result {
     if over.0.is_empty() {
         return Ok(());
     }
     let (text, refused) = what_a_drop_does(&over.0);
     let ctx = contexts.ctx_mut()?;
     egui::Area::new(egui::Id::new("file-drop-hint"))
-        .anchor(egui::Align2::CENTER_CENTER, [140.0, 0.0])
+        .anchor(egui::Align2::CENTER_CENTER, [view.canvas_offset(), 0.0])
         .order(egui::Order::Foreground)
         .interactable(false)
         .show(ctx, |ui| {

@@ -38,6 +38,14 @@ pub struct CanvasView {
     pub fit: Option<(DVec2, DVec2)>,
 }
 
+impl CanvasView {
+    /// How far right of the window's middle the canvas's middle is, in logical pixels: the
+    /// offset that centres a window-anchored overlay over the canvas.
+    pub fn canvas_offset(&self) -> f32 {
+        self.panel_width / 2.0
+    }
+}
+
 impl Default for CanvasView {
     fn default() -> Self {
         CanvasView {
@@ -233,5 +241,22 @@ mod tests {
         let (min, max) = view.visible();
         assert!(min.x < 0.0 && min.y < 0.0 && max.x > 1.0 && max.y > 1.0);
         assert!(view.window_to_world(Vec2::new(view.panel_width, 0.0)).x < 0.0);
+    }
+
+    /// An overlay anchored at the window's middle plus [`CanvasView::canvas_offset`] sits over
+    /// the canvas's middle, whatever the panel's width (it was a fixed 140 px, half of a panel
+    /// narrower than the 290 px one).
+    #[test]
+    fn the_canvas_offset_centres_an_overlay_over_the_canvas() {
+        for panel_width in [0.0, 290.0, 412.5] {
+            let mut view = CanvasView {
+                panel_width,
+                ..Default::default()
+            };
+            view.lay_out(Vec2::new(1280.0, 800.0));
+            let canvas_middle = (panel_width + 1280.0) / 2.0;
+            assert_eq!(640.0 + view.canvas_offset(), canvas_middle);
+            assert_eq!(view.center.x, canvas_middle);
+        }
     }
 }
