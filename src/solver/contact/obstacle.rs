@@ -320,6 +320,12 @@ impl Placed {
         Some(Touch { depth, normal })
     }
 
+    /// Whether the shape is a segment: thin, with a side that only the way a particle came can
+    /// tell.
+    pub fn is_segment(&self) -> bool {
+        matches!(self.shape, Shape::Segment { .. })
+    }
+
     /// The outward normal where a path moving by `step` first touched the shape at `p`: the
     /// surface's normal there, turned to face the path (a particle exactly on a line has no
     /// side of its own; it is on the side it came from).

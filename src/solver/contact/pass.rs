@@ -354,7 +354,19 @@ pub(crate) fn place(
         let o = &obstacles[i];
         let step = *x - from;
         let hit = from + step * t;
-        let n = o.hit_normal(hit, heading);
+        // A segment's side is its path's start's, when the path starts off it: a solve's
+        // iterate can land across a segment while its heading (its velocity plus a step of its
+        // forces, far off at a frame's step) points away, and was put on the far side (implicit
+        // Euler's gas ball went through a slope at 1/60 s). A start on its line has no side of
+        // its own and takes the one it heads from. A closed shape keeps the heading: facing its
+        // hit to the path made BDF2's settled pile creep up (docs/performance-log.md,
+        // 2026-12-05, the thrown box under implicit Euler).
+        let toward = if t > 0.0 && o.is_segment() {
+            step
+        } else {
+            heading
+        };
+        let n = o.hit_normal(hit, toward);
         let rest = step * (1.0 - t);
         let into = (-rest.dot(n)).max(0.0);
         *x = hit + rest + n * into;
