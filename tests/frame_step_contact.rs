@@ -107,14 +107,6 @@ fn box_areas(cells: &[f64]) -> Vec<f64> {
     cells.chunks(16).map(|c| c.iter().sum()).collect()
 }
 
-fn inverted(start: &[f64], end: &[f64]) -> usize {
-    start
-        .iter()
-        .zip(end)
-        .filter(|(a, b)| a.signum() != b.signum())
-        .count()
-}
-
 /// The pile under `integrator` at `dt` for `seconds`: the worst of every step's look, and the
 /// cells at the end.
 fn run(mut app: App, dt: f64, seconds: f64) -> (Look, Look, Vec<f64>, Vec<f64>) {

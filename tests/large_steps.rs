@@ -548,9 +548,7 @@ fn implicit_euler_rests_a_gas_ball_on_the_ground_at_a_frames_step() {
             let steps = (10.0 / dt).round() as u64;
             never_gains_energy(&mut app, Integrator::ImplicitEuler, steps);
             let s = solver(&app);
-            let kinetic: f64 = (s.v().iter().zip(s.mass()))
-                .map(|(v, m)| 0.5 * m * v.length_squared())
-                .sum();
+            let kinetic = kinetic(s);
             let case = format!("dt {dt}, {newton} Newton steps, {extra:?}");
             assert!(kinetic < 1e-6, "{case}: {kinetic:e} J of motion left");
             let lowest = s.x().iter().map(|x| x.y).fold(f64::INFINITY, f64::min);
@@ -588,10 +586,7 @@ fn implicit_euler_lands_a_box_at_a_frames_step() {
         let from = centre(solver(&app).x());
         never_gains_energy(&mut app, Integrator::ImplicitEuler, 180);
         let x = solver(&app).x();
-        let end = grid_triangles(x, 8);
-        let turned = (start.iter().zip(&end))
-            .filter(|(a, b)| a.signum() != b.signum())
-            .count();
+        let turned = inverted(&start, &grid_triangles(x, 8));
         let case = if contact.is_some() {
             "contact set"
         } else {
@@ -688,22 +683,14 @@ fn a_body_landing_at_a_frames_step_keeps_its_shape_without_contact_settings() {
         let tall = height(solver(&app).x());
         never_gains_energy(&mut app, integrator, 360);
         let x = solver(&app).x();
-        let end = grid_triangles(x, 8);
-        let turned = start
-            .iter()
-            .zip(&end)
-            .filter(|(a, b)| a.signum() != b.signum())
-            .count();
+        let turned = inverted(&start, &grid_triangles(x, 8));
         assert_eq!(turned, 0, "{integrator}: {turned} triangles turned");
         assert!(
             height(x) > 0.9 * tall,
             "{integrator}: the box is {:.3} m high, {tall:.3} m at the start",
             height(x)
         );
-        let s = solver(&app);
-        let kinetic: f64 = (s.v().iter().zip(s.mass()))
-            .map(|(v, m)| 0.5 * m * v.length_squared())
-            .sum();
+        let kinetic = kinetic(solver(&app));
         assert!(kinetic < 1e-3, "{integrator}: {kinetic:e} J of motion left");
     }
 }

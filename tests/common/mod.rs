@@ -214,3 +214,20 @@ pub fn balanced_area(segments: usize, k: f64, nrt: f64) -> f64 {
 pub fn ring_area(solver: &Solver) -> f64 {
     solver.materials().gas()[0].signed_area(solver.x()).abs()
 }
+
+/// How many of the signed areas in `start` have another sign in `end`: cells or triangles
+/// turned inside out.
+pub fn inverted(start: &[f64], end: &[f64]) -> usize {
+    start
+        .iter()
+        .zip(end)
+        .filter(|(a, b)| a.signum() != b.signum())
+        .count()
+}
+
+/// The particles' kinetic energy, J.
+pub fn kinetic(s: &Solver) -> f64 {
+    (s.v().iter().zip(s.mass()))
+        .map(|(v, m)| 0.5 * m * v.length_squared())
+        .sum()
+}
