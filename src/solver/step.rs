@@ -91,6 +91,8 @@ pub struct Workspace {
     /// (its start velocity plus a step of its forces' acceleration), for the restitution
     /// after it; empty when the last step's solve did not.
     pub(crate) pre_contact: Vec<DVec2>,
+    /// Each obstacle's reach for the step's solve ([`contact::reaches`]).
+    pub(crate) reach: Vec<f64>,
 }
 
 impl Workspace {
@@ -108,6 +110,7 @@ impl Workspace {
             pairs: Pairs::default(),
             outlines: Outlines::default(),
             pre_contact: Vec::new(),
+            reach: Vec::new(),
         }
     }
 
@@ -343,9 +346,20 @@ pub fn integrate(
         w.pre_contact
             .extend((0..s.x.len()).map(|i| data.0[i] + data.1[i] * (data.2[i] * dt)));
     }
+    if let Some(a) = around {
+        w.reach = contact::reaches(a.obstacles, a.settings.map_or(0.0, |c| c.radius));
+    }
     let contact = around.and_then(|a| {
         let (pairs, outlines) = (Some(&w.pairs), Some(&w.outlines));
-        InSolve::new(a, pairs, outlines, &w.pre_contact, dt, bare_ground)
+        InSolve::new(
+            a,
+            pairs,
+            outlines,
+            &w.pre_contact,
+            &w.reach,
+            dt,
+            bare_ground,
+        )
     });
     let contact = contact.as_ref();
     match m.integrator {
@@ -492,7 +506,8 @@ pub fn collide(
 ) -> Contacts {
     let pairs = match around.settings {
         Some(c) if c.particles => {
-            let keep_out = |p| around.keep_out(p);
+            let reach = contact::reaches(around.obstacles, c.radius);
+            let keep_out = |p| around.keep_out(p, &reach);
             let surface = around.surface(dt, gravity);
             // The methods whose velocity is where the step went (implicit Euler, projective
             // dynamics, XPBD) take the push into it, as position-based dynamics does.

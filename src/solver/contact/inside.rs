@@ -35,6 +35,8 @@ use glam::DVec2;
 #[derive(Clone, Copy)]
 pub struct InSolve<'a> {
     obstacles: &'a [Placed],
+    /// Each obstacle's reach ([`super::pass::reaches`]).
+    reach: &'a [f64],
     ground: Option<f64>,
     radius: f64,
     friction: f64,
@@ -64,7 +66,8 @@ pub(crate) struct Held {
 impl<'a> InSolve<'a> {
     /// The contact of a step of `dt` with `around`'s surfaces, and with particle pairs through
     /// `pairs` when they are readied ([`Pairs::ready_for_step`]). `None` when there is nothing
-    /// to keep out of: a scene without contact runs exactly what it ran before.
+    /// to keep out of: a scene without contact runs exactly what it ran before. `reach` holds
+    /// each obstacle's [`super::pass::reaches`] at the contact radius.
     ///
     /// `bare_ground`: the ground is kept out of even without contact settings (the methods
     /// whose solve the step's own clamp cannot reach: [`crate::solver::step::integrate`]).
@@ -73,6 +76,7 @@ impl<'a> InSolve<'a> {
         pairs: Option<&'a Pairs>,
         outlines: Option<&'a Outlines>,
         heading: &'a [DVec2],
+        reach: &'a [f64],
         dt: f64,
         bare_ground: bool,
     ) -> Option<Self> {
@@ -98,6 +102,7 @@ impl<'a> InSolve<'a> {
         }
         Some(InSolve {
             obstacles,
+            reach,
             ground,
             radius,
             friction: settings.friction,
@@ -186,6 +191,7 @@ impl<'a> InSolve<'a> {
             from,
             heading,
             self.obstacles,
+            self.reach,
             self.radius,
             self.ground,
             |x, touched: Touched| {

@@ -16,5 +16,6 @@ pub mod pairs;
 mod pass;
 pub mod reaction;
 
+pub(crate) use pass::reaches;
 pub use pass::{ContactSettings, Surroundings, collide, moves_with_drift, settle};
 pub use reaction::{Inertia, Reaction, Reactions};

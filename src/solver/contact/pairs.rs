@@ -86,6 +86,12 @@ pub const MAX_ITERATIONS: usize = 32;
 /// third of the iterations there.
 const RELAXATION: f64 = 1.5;
 
+/// The pair passes split their particles over the threads in chunks of at least this many:
+/// each comes with its list (about ten neighbours in a crumpled cloth), and the 256² cloth on
+/// a disc has a few thousand listed particles, under the particle passes' threshold, through
+/// up to 32 iterations a step.
+const PAIR_CHUNK: usize = 1024;
+
 /// The overlap, as a share of 2r, under which the position iterations stop.
 pub const TOLERANCE: f64 = 0.01;
 
@@ -367,7 +373,8 @@ impl Pairs {
         let cell = |p: DVec2| ((p.x / reach).floor() as i64, (p.y / reach).floor() as i64);
         let slot = |c: (i64, i64)| {
             let h = c.0.wrapping_mul(92_837_111) ^ c.1.wrapping_mul(689_287_499);
-            (h as u64 % table as u64) as usize
+            // The table's size is a power of two: a mask, not a division per cell.
+            (h as u64 & (table as u64 - 1)) as usize
         };
         // Counting sort of the particles by hash slot.
         let mut start = vec![0u32; table + 1];
@@ -378,10 +385,14 @@ impl Pairs {
         for h in 0..table {
             start[h + 1] += start[h];
         }
+        // Each entry with its particle's position beside it: a slot's candidates are then read
+        // in one run of memory, not one random read of the positions each.
         let mut fill = start.clone();
         let mut entries = vec![0u32; n];
+        let mut at = vec![DVec2::ZERO; n];
         for (i, &h) in slots.iter().enumerate() {
-            entries[fill[h] as usize] = i as u32;
+            let k = fill[h] as usize;
+            (entries[k], at[k]) = (i as u32, x[i]);
             fill[h] += 1;
         }
         let reach2 = reach * reach;
@@ -413,9 +424,10 @@ impl Pairs {
                         continue;
                     }
                     seen[k] = h;
-                    for &j in &entries[start[h] as usize..start[h + 1] as usize] {
+                    let run = start[h] as usize..start[h + 1] as usize;
+                    for (&j, &xj) in entries[run.clone()].iter().zip(&at[run]) {
                         let j = j as usize;
-                        let d2 = (x[i] - x[j]).length_squared();
+                        let d2 = (x[i] - xj).length_squared();
                         if j == i || d2 >= reach2 || excluded(i, j) {
                             continue;
                         }
@@ -466,7 +478,8 @@ impl Pairs {
         self.out.resize(self.active.len(), DVec2::ZERO);
         let (x, w, list) = (&s.x, &s.inv_mass, &self.list);
         let data = (&mut self.out[..], &self.active[..], &self.active_span[..]);
-        let found = threads.chunked(
+        let found = threads.chunked_by(
+            PAIR_CHUNK,
             springs,
             data,
             |(out, active, span)| {
@@ -536,7 +549,7 @@ impl Pairs {
             }
             pairs
         };
-        let pairs = threads.chunked(springs, data, pass, |a, b| a + b) / 2;
+        let pairs = threads.chunked_by(PAIR_CHUNK, springs, data, pass, |a, b| a + b) / 2;
         for (&i, o) in self.active.iter().zip(&self.out) {
             s.v[i as usize] = *o;
         }

@@ -248,10 +248,23 @@ impl Threads {
         pass: impl Fn(S) -> R + Sync,
         join: impl Fn(R, R) -> R + Sync,
     ) -> R {
+        self.chunked_by(PARTICLE_CHUNK, springs, data, pass, join)
+    }
+
+    /// [`Self::chunked`] in chunks of at least `least` items: for passes whose items each
+    /// carry many particles' work (the pair contact's particles, each with its neighbour list).
+    pub(crate) fn chunked_by<S: Split, R: Send>(
+        &self,
+        least: usize,
+        springs: usize,
+        data: S,
+        pass: impl Fn(S) -> R + Sync,
+        join: impl Fn(R, R) -> R + Sync,
+    ) -> R {
         let n = data.len();
         match self.pool_for(springs) {
-            Some(pool) if n >= 2 * PARTICLE_CHUNK => {
-                let chunk = n.div_ceil(self.threads).max(PARTICLE_CHUNK);
+            Some(pool) if n >= 2 * least => {
+                let chunk = n.div_ceil(self.threads).max(least);
                 let mut pieces = Vec::new();
                 halve(data, chunk, &mut pieces);
                 let results = self.map_items(pool, pieces, &pass);
