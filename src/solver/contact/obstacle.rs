@@ -296,7 +296,8 @@ impl Placed {
     /// `from` is where it came from and `heading` where it is going: a particle that crossed a
     /// segment's line within the step is put back on the side it came from, not pushed on
     /// through, and one that sits on the line itself (to round-off, with no side of its own) is
-    /// put on the side it is not heading to.
+    /// put on the side it is not heading to. One that ends inside a closed shape past its
+    /// middle, from a start outside it, goes back out on the start's side, not the far one.
     pub fn touch(&self, p: DVec2, from: DVec2, heading: DVec2, r: f64) -> Option<Touch> {
         let (d, mut normal) = self.distance(p);
         if d >= r + SLOP {
@@ -315,6 +316,20 @@ impl Placed {
             if flip {
                 normal = -normal;
                 depth = r + 2.0 * thickness + d;
+            }
+        } else if d < 0.0 {
+            // Inside a closed shape the nearest surface is the way out, unless the particle
+            // came from the other side: then it crossed the shape's middle within the step and
+            // would leave through the far side. The swept test leaves two such paths to this
+            // push: a start in contact (a particle resting on the surface whose iterate a
+            // solve pulled deep in), and a path whose hit faced the particle's heading, away
+            // from the surface. Out on the start's side instead, to the tangent at the surface
+            // point nearest the start: a convex shape lies wholly behind it.
+            let (d0, n0) = self.distance(from);
+            if d0 >= 0.0 && n0.dot(normal) < 0.0 {
+                let surface = from - n0 * d0;
+                normal = n0;
+                depth = r - (p - surface).dot(n0);
             }
         }
         Some(Touch { depth, normal })
@@ -591,6 +606,76 @@ mod tests {
 
     fn at(shape: Shape, center: DVec2, angle: f64) -> Placed {
         Placed::at(shape, center, angle)
+    }
+
+    /// A particle whose end lies past a closed shape's middle, from a start outside it, goes
+    /// back out on the start's side: from a start in contact (resting on the surface) and from
+    /// one clear of it, for a disc, a turned box and a turned hexagon, with ends at several
+    /// depths past the middle. Out by the nearest surface it left through the far side.
+    #[test]
+    fn an_end_past_a_closed_shapes_middle_goes_back_out_on_its_start_side() {
+        let r = 0.01;
+        let hexagon: Vec<DVec2> = (0..6)
+            .map(|k| DVec2::from_angle(k as f64 * std::f64::consts::FRAC_PI_3) * 0.2)
+            .collect();
+        let shapes = [
+            at(Shape::Circle { radius: 0.2 }, DVec2::new(0.5, 0.5), 0.0),
+            at(
+                Shape::Box {
+                    half: DVec2::new(0.3, 0.1),
+                },
+                DVec2::new(0.5, 0.5),
+                0.4,
+            ),
+            at(
+                Shape::Polygon(Polygon::new(&hexagon).unwrap()),
+                DVec2::new(0.5, 0.5),
+                0.3,
+            ),
+        ];
+        let mut tried = 0;
+        for o in &shapes {
+            for k in 0..16 {
+                let dir = DVec2::from_angle(k as f64 * std::f64::consts::TAU / 16.0);
+                // The surface point along `dir` from the centre, by bisection on the distance.
+                let (mut lo, mut hi) = (0.0, 1.0);
+                for _ in 0..60 {
+                    let mid = 0.5 * (lo + hi);
+                    if o.distance(o.pose.center + dir * mid).0 < 0.0 {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                let edge = o.pose.center + dir * lo;
+                for start_gap in [0.5 * r, 3.0 * r] {
+                    let from = edge + o.distance(edge).1 * start_gap;
+                    let (_, n0) = o.distance(from);
+                    for past in [0.2, 0.5, 0.8] {
+                        // An end past the middle, toward the far side.
+                        let p = o.pose.center - dir * (lo * past);
+                        let (d, far) = o.distance(p);
+                        if d >= 0.0 || far.dot(n0) >= 0.0 {
+                            // Nearest to a side of the start's own, or to one across: no far
+                            // side to leave through.
+                            continue;
+                        }
+                        tried += 1;
+                        let t = o
+                            .touch(p, from, -dir, r)
+                            .expect("a particle inside touches");
+                        let out = p + t.normal * t.depth;
+                        assert!(
+                            t.normal.dot(n0) > 0.99 && o.distance(out).0 >= r - 1e-9,
+                            "{:?}: from {from} to {p}, out at {out} along {}",
+                            o.shape,
+                            t.normal
+                        );
+                    }
+                }
+            }
+        }
+        assert!(tried >= 100, "only {tried} ends past a middle");
     }
 
     #[test]
