@@ -348,12 +348,11 @@ pub(crate) fn reaches(obstacles: &[Placed], r: f64) -> Vec<f64> {
 
 /// Puts a particle that moved from `from` to `x` (heading `heading`) back out of the obstacles
 /// (`reach`: each one's [`reaches`]) and the ground (`ground`: its height when this pass
-/// handles it) by the radius `r`, and calls
-/// `touched(x, surface)` for each surface it was put on. A path that
-/// crosses into an obstacle stops where it first touches and slides on along the surface for
-/// the rest of its travel, so that no step, however large, carries a particle through a thin
-/// one. Returns the contacts. The contact pass and the large-step methods' solves
-/// ([`super::inside`]) both place particles with it.
+/// handles it) by the radius `r`, and calls `touched(x, surface)` for each surface it was put
+/// on. A path that crosses into an obstacle stops where it first touches and slides on along
+/// the surface for the rest of its travel, so that no step, however large, carries a particle
+/// through a thin one. Returns the contacts. The contact pass and the large-step methods'
+/// solves ([`super::inside`]) both place particles with it.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn place(
     x: &mut DVec2,
