@@ -507,7 +507,7 @@ pub fn collide(
     let pairs = match around.settings {
         Some(c) if c.particles => {
             let reach = contact::reaches(around.obstacles, c.radius);
-            let keep_out = |p| around.keep_out(p, &reach);
+            let keep_out = |p, from| around.keep_out(p, from, &reach);
             let surface = around.surface(dt, gravity);
             // The methods whose velocity is where the step went (implicit Euler, projective
             // dynamics, XPBD) take the push into it, as position-based dynamics does.

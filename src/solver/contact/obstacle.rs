@@ -335,6 +335,18 @@ impl Placed {
         Some(Touch { depth, normal })
     }
 
+    /// Where the path `from` → `to` crosses a segment's line within its length, as a fraction
+    /// of the path in (0, 1]; `None` for a closed shape, a path that stays on one side, and a
+    /// start on the line (which has no side to keep).
+    pub fn crossing(&self, from: DVec2, to: DVec2) -> Option<f64> {
+        match self.shape.for_contact() {
+            Shape::Segment { a, b, .. } => {
+                line_crossing(self.local(from), self.local(to), a, b).filter(|&t| t > 0.0)
+            }
+            _ => None,
+        }
+    }
+
     /// Whether the shape is a segment: thin, with a side that only the way a particle came can
     /// tell.
     pub fn is_segment(&self) -> bool {

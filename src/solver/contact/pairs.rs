@@ -155,7 +155,7 @@ impl Pairs {
         s: &mut State,
         radius: f64,
         surface: Surface,
-        keep_out: &(dyn Fn(DVec2) -> DVec2 + Sync),
+        keep_out: &(dyn Fn(DVec2, DVec2) -> DVec2 + Sync),
         velocity_follows: Option<f64>,
         threads: &Threads,
     ) -> PairReport {
@@ -471,7 +471,7 @@ impl Pairs {
         &mut self,
         s: &mut State,
         contact: f64,
-        keep_out: &(dyn Fn(DVec2) -> DVec2 + Sync),
+        keep_out: &(dyn Fn(DVec2, DVec2) -> DVec2 + Sync),
         threads: &Threads,
         springs: usize,
     ) -> (usize, f64) {
@@ -489,7 +489,7 @@ impl Pairs {
                     let (to, t, d) = pushed(i, x, w, &list[a as usize..b as usize], contact);
                     // Only a particle the pass moved (the obstacles' own pass, swept, handles
                     // the rest).
-                    *o = if to != x[i] { keep_out(to) } else { to };
+                    *o = if to != x[i] { keep_out(to, x[i]) } else { to };
                     touching += t;
                     deepest = deepest.max(d);
                 }

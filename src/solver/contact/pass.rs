@@ -116,19 +116,28 @@ impl Surroundings<'_> {
         self.settings.map_or(0.0, |s| s.radius)
     }
 
-    /// `p` pushed out of the ground (when contact is set) and the obstacles by the radius
-    /// (`reach`: each obstacle's [`reaches`] at it), positions only: what the pair solve holds
-    /// its particles to between its iterations, so that a particle pressed against the ground
-    /// by another stays on it and the other moves.
-    pub(crate) fn keep_out(&self, mut p: DVec2, reach: &[f64]) -> DVec2 {
-        let r = self.radius();
+    /// `p`, pushed there from `from`, put back out of the ground (when contact is set) and the
+    /// obstacles by the radius (`reach`: each obstacle's [`reaches`] at it), positions only:
+    /// what the pair solve holds its particles to between its iterations, so that a particle
+    /// pressed against the ground by another stays on it and the other moves. Out by the
+    /// nearest surface, but on `from`'s side ([`Placed::touch`]); a push across a segment's
+    /// line goes back to the line first, then out on that side. A push of up to 3r (the pair
+    /// solve's over-relaxation) can carry a light particle under a heavy one across a thin
+    /// plank, even clear of its far side, or past a shape's middle: out by the nearest surface
+    /// alone it went on through.
+    pub(crate) fn keep_out(&self, mut p: DVec2, from: DVec2, reach: &[f64]) -> DVec2 {
+        let (r, push) = (self.radius(), p - from);
+        let travel = push.abs().element_sum();
         for (o, &reach) in self.obstacles.iter().zip(reach) {
-            if (p - o.pose.center).length_squared() > reach * reach {
+            let within = reach + travel;
+            if (p - o.pose.center).length_squared() > within * within {
                 continue;
             }
-            let (d, n) = o.distance(p);
-            if d < r {
-                p += n * (r - d);
+            if let Some(t) = o.crossing(from, p) {
+                p = from + push * t;
+            }
+            if let Some(touch) = o.touch(p, from, push, r) {
+                p += touch.normal * touch.depth;
             }
         }
         if let Some(g) = self.ground() {
@@ -549,9 +558,10 @@ mod tests {
         for i in 0..=300 {
             for j in 0..=300 {
                 let x = DVec2::new(-1.5 + 0.01 * i as f64, -1.2 + 0.009 * j as f64);
-                let kept = around.keep_out(x, &reach);
-                assert_eq!(kept, around.keep_out(x, &every), "keep_out at {x}");
                 for step in steps {
+                    let kept = around.keep_out(x, x - step, &reach);
+                    let everywhere = around.keep_out(x, x - step, &every);
+                    assert_eq!(kept, everywhere, "keep_out at {x} by {step}");
                     let placed = |reach: &[f64]| {
                         let (mut end, mut surfaces) = (x, vec![]);
                         let contacts = place(
@@ -582,5 +592,82 @@ mod tests {
             untouched > 100_000 && touched > 20_000,
             "{untouched} {touched}"
         );
+    }
+
+    /// The pair solve's hold puts a pushed particle back on the side it was pushed from: a
+    /// particle on or near a disc of radius 2r, a turned box 4r thick, a plank of no thickness and
+    /// a thick one, pushed by up to 3r past the middle or across the line (a push that ends
+    /// clear of the plank on its far side, too), is put out no nearer than r to the tangent at
+    /// the surface point nearest its start, on the start's side. By the nearest surface it
+    /// went out the far side (a light particle under a heavy one through a plank:
+    /// tests/frame_step_contact.rs).
+    #[test]
+    fn the_pair_solves_hold_puts_a_pushed_particle_back_on_its_side() {
+        let r = 0.01;
+        let obstacles = [
+            Placed::at(Shape::Circle { radius: 0.02 }, DVec2::new(0.0, 0.0), 0.0),
+            Placed::at(
+                Shape::Box {
+                    half: DVec2::new(0.2, 0.02),
+                },
+                DVec2::new(1.0, 0.0),
+                0.4,
+            ),
+            Placed::at(
+                Shape::Segment {
+                    a: DVec2::new(-0.3, 0.0),
+                    b: DVec2::new(0.3, 0.1),
+                    thickness: 0.0,
+                },
+                DVec2::new(2.0, 0.0),
+                0.0,
+            ),
+            Placed::at(
+                Shape::Segment {
+                    a: DVec2::new(-0.3, 0.0),
+                    b: DVec2::new(0.3, 0.0),
+                    thickness: 0.004,
+                },
+                DVec2::new(3.0, 0.0),
+                -0.3,
+            ),
+        ];
+        let mut tried = 0;
+        for o in &obstacles {
+            let around = Surroundings {
+                obstacles: std::slice::from_ref(o),
+                ground: None,
+                settings: Some(ContactSettings {
+                    radius: r,
+                    ..Default::default()
+                }),
+                reactions: None,
+            };
+            let reach = reaches(std::slice::from_ref(o), r);
+            for k in 0..12 {
+                let dir = DVec2::from_angle(k as f64 * std::f64::consts::TAU / 12.0);
+                for gap in [0.5 * r, r, 1.5 * r] {
+                    // A start `gap` out from the surface point nearest a point near the middle.
+                    let (d, n) = o.distance(o.pose.center + dir * 0.005);
+                    let surface = o.pose.center + dir * 0.005 - n * d;
+                    let from = surface + n * gap;
+                    for push in [0.5, 1.0, 1.5, 2.5, 3.0] {
+                        // Pushed toward and past the middle (not onto the disc's centre, where
+                        // every way out is the nearest), by up to 3r beyond the line.
+                        let p = from - n * (gap + push * r);
+                        let kept = around.keep_out(p, from, &reach);
+                        let out = (kept - surface).dot(n);
+                        assert!(
+                            out >= r - 1e-9,
+                            "obstacle at {}: pushed from {from} to {p}, kept at {kept}, \
+                             {out} m out on the start's side",
+                            o.pose.center
+                        );
+                        tried += 1;
+                    }
+                }
+            }
+        }
+        assert_eq!(tried, 4 * 12 * 3 * 5);
     }
 }

@@ -179,6 +179,15 @@ fn touch(o: Obstacle, at: vec2<real>, start: vec2<real>, heading: vec2<real>, r:
             normal = -normal;
             depth = r + real(2.0) * o.size + dn.d;
         }
+    } else if (dn.d < real(0.0)) {
+        // Past a closed shape's middle from a start outside it: out on the start's side, to
+        // the tangent at the surface point nearest the start (`Placed::touch`).
+        let back = distance_to(o, start);
+        if (back.d >= real(0.0) && dot(back.n, normal) < real(0.0)) {
+            let surface = start - back.n * back.d;
+            normal = back.n;
+            depth = r - dot(at - surface, back.n);
+        }
     }
     return Touch(true, depth, normal);
 }

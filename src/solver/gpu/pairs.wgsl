@@ -83,14 +83,21 @@ fn joined(i: u32, j: u32) -> bool {
     return false;
 }
 
-// `at` pushed out of the obstacles and (when contact is set) the ground by the radius,
-// positions only (`Surroundings::keep_out`).
-fn keep_out(at: vec2<real>) -> vec2<real> {
+// `at`, pushed there from `start`, put back out of the obstacles and (when contact is set)
+// the ground by the radius, positions only: by the nearest surface on `start`'s side, a push
+// across a segment's line back to the line first (`Surroundings::keep_out`).
+fn keep_out(at: vec2<real>, start: vec2<real>) -> vec2<real> {
     var q = at;
     let r = p.radius;
+    let push = at - start;
     for (var k = 0u; k < p.obstacles; k++) {
-        let dn = distance_to(obstacles[k], q);
-        if (dn.d < r) { q += dn.n * (r - dn.d); }
+        let o = obstacles[k];
+        if (is_segment(o)) {
+            let t = line_crossing(local(o, start), local(o, q), o.a, o.b);
+            if (t > real(0.0)) { q = start + push * t; }
+        }
+        let touched = touch(o, q, start, push, r);
+        if (touched.hit) { q += touched.normal * touched.depth; }
     }
     if ((p.flags & 1u) != 0u) { q.y = max(q.y, p.ground + r); }
     return q;
@@ -231,7 +238,7 @@ fn pair_separate(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_work
     if (count > 0u) {
         to = xi + push * min(RELAXATION / real(count), real(1.0));
         // Only a particle the pass moved (the obstacles' own pass, swept, handles the rest).
-        if (iterating && any(to != xi)) { to = keep_out(to); }
+        if (iterating && any(to != xi)) { to = keep_out(to, xi); }
     }
     x_to[i] = to;
     if (!iterating) { return; }
