@@ -424,6 +424,36 @@ fn a_slip_from_json_or_the_command_line_is_named_with_the_ron_for_it() {
             "a comma is missing before `-9.8`",
         ),
         ("dt: 0.0001,", "dt: 0.0001", 7, "a comma is missing"),
+        (
+            "(a: 0, b: 1,",
+            "(a: 0, b: 1.5,",
+            12,
+            "`b` takes a whole number, written without a decimal point or an exponent, not `1.5`",
+        ),
+        (
+            "(a: 0, b: 1,",
+            "(a: 0, b: 1e1,",
+            12,
+            "`b` takes a whole number, written without a decimal point or an exponent, not `1e1`",
+        ),
+        (
+            "(a: 0, b: 1,",
+            "(a: -1, b: 1,",
+            12,
+            "`a` takes a whole number of 0 or more, not `-1`",
+        ),
+        (
+            "(a: 0, b: 1,",
+            "(a: 0, b: 99999999999999999999999,",
+            12,
+            "`b` takes a whole number no larger than its field holds, not `99999999999999999999999`",
+        ),
+        (
+            "(a: 0, b: 1,",
+            "(a: NaN, b: 1,",
+            12,
+            "`a` takes a whole number, not `NaN`",
+        ),
     ] {
         let msg = parse(&scene_text(|s| s.replacen(from, to, 1)))
             .expect_err(to)

@@ -53,9 +53,23 @@ fn around(text: &str, line: usize, col: usize) -> (&str, &str) {
 /// - brackets for a pair or a struct (`gravity: [0.0, -9.8]`), parentheses for a list;
 /// - the command line's hyphens (`integrator: projective-dynamics`, `spring-damping: 2.0`),
 ///   for which ron suggests a raw identifier, `r#projective-dynamics`, that no scene knows;
-/// - a comma left out between two fields or entries (ron says "Expected comma" and no more).
+/// - a comma left out between two fields or entries (ron says "Expected comma" and no more);
+/// - a decimal, an exponent, a sign or a non-number where a whole number is wanted (`segments:
+///   2.5`, `cols: 1e3`, `b: -1`), which ron reports as a missing comma before `.5` or a bad
+///   digit, with no field named ([`whole_number`]).
 fn slip(code: &ron::Error, before: &str, after: &str) -> Option<String> {
     match code {
+        ron::Error::InvalidIntegerDigit { .. }
+        | ron::Error::IntegerOutOfBounds
+        | ron::Error::ExpectedInteger => whole_number(before, after),
+        // `2.5` in a whole number's place: ron reads `2` and wants a comma before `.5`.
+        ron::Error::ExpectedComma
+            if before.ends_with(|c: char| c.is_ascii_digit())
+                && after.starts_with('.')
+                && after[1..].starts_with(|c: char| c.is_ascii_digit()) =>
+        {
+            whole_number(before, after)
+        }
         ron::Error::SuggestRawIdentifier(name) if name.contains('-') => {
             let field = (after.strip_prefix(name.as_str()))
                 .is_some_and(|rest| rest.trim_start().starts_with(':'));
@@ -124,6 +138,38 @@ fn slip(code: &ron::Error, before: &str, after: &str) -> Option<String> {
         }
         _ => None,
     }
+}
+
+/// The message for a value that is not a whole number where one is wanted: the field's name
+/// and the value as written, split by the error's place into `before` and `after`; `None` when
+/// no field's name stands before the value (ron's own words then).
+fn whole_number(before: &str, after: &str) -> Option<String> {
+    let separator = |c: char| c.is_whitespace() || matches!(c, ':' | ',' | '(' | ')' | '[' | ']');
+    let head = before.trim_end_matches(|c: char| !separator(c));
+    let value = format!(
+        "{}{}",
+        &before[head.len()..],
+        &after[..after.find(separator).unwrap_or(after.len())]
+    );
+    let head = head.trim_end().strip_suffix(':')?.trim_end();
+    let field = &head[head
+        .trim_end_matches(|c: char| c.is_alphanumeric() || c == '_')
+        .len()..];
+    if field.is_empty() || value.is_empty() {
+        return None;
+    }
+    let how = if value.starts_with('-') {
+        " of 0 or more"
+    } else if value.parse::<f64>().is_ok_and(f64::is_finite) && value.contains(['.', 'e', 'E']) {
+        ", written without a decimal point or an exponent"
+    } else if value.chars().all(|c| c.is_ascii_digit()) {
+        " no larger than its field holds"
+    } else {
+        ""
+    };
+    Some(format!(
+        "`{field}` takes a whole number{how}, not `{value}`"
+    ))
 }
 
 /// `word` with its first letter in capitals: `projective` → `Projective`.
