@@ -77,13 +77,13 @@ enum BenchCommand {
         #[arg(long, default_value = "docs/reports")]
         out: PathBuf,
         /// Thread counts to measure, each 1 to 256 (default: 1 and all cores).
-        #[arg(long, value_delimiter = ',')]
+        #[arg(long, value_parser = hooke::readable::whole::<usize>, value_delimiter = ',')]
         threads: Vec<usize>,
         /// Spring updates per run (sets the number of steps).
         #[arg(long, default_value_t = 3e7)]
         budget: f64,
         /// Runs per figure (the median is reported; thread counts alternate between runs).
-        #[arg(long, default_value_t = 3)]
+        #[arg(long, value_parser = hooke::readable::whole::<usize>, default_value_t = 3)]
         repeat: usize,
     },
     /// Loading and stepping cloths of 1 M to 16 M springs: the load's phases and peak memory
@@ -96,20 +96,20 @@ enum BenchCommand {
         #[arg(long, default_value = "docs/reports")]
         out: PathBuf,
         /// Cloth widths (particles per side; default about 1, 2, 4, 8 and 16 M springs).
-        #[arg(long, value_delimiter = ',')]
+        #[arg(long, value_parser = hooke::readable::whole::<usize>, value_delimiter = ',')]
         widths: Vec<usize>,
         /// Thread counts to measure, each 1 to 256 (default: 1 and all cores).
-        #[arg(long, value_delimiter = ',')]
+        #[arg(long, value_parser = hooke::readable::whole::<usize>, value_delimiter = ',')]
         threads: Vec<usize>,
         /// Steps per run.
-        #[arg(long, default_value_t = 20)]
+        #[arg(long, value_parser = hooke::readable::whole::<u64>, default_value_t = 20)]
         steps: u64,
         /// Runs per figure (the median is reported; thread counts alternate between runs).
-        #[arg(long, default_value_t = 3)]
+        #[arg(long, value_parser = hooke::readable::whole::<usize>, default_value_t = 3)]
         repeat: usize,
         /// Measure one cloth of this width in this process and print its row as JSON (what
         /// the report runs each cloth in a process of its own with).
-        #[arg(long, hide = true)]
+        #[arg(long, value_parser = hooke::readable::whole::<usize>, hide = true)]
         one: Option<usize>,
     },
     /// Every method at real-time steps (dt = 1/30 to 1/960 s) on four scenes: error against a
@@ -140,13 +140,13 @@ enum BenchCommand {
         #[arg(long, default_value = "docs/reports")]
         out: PathBuf,
         /// Cloth widths (particles per side).
-        #[arg(long, value_delimiter = ',')]
+        #[arg(long, value_parser = hooke::readable::whole::<usize>, value_delimiter = ',')]
         widths: Vec<usize>,
         /// Spring updates per figure (sets the number of steps).
         #[arg(long, default_value_t = 2e8)]
         budget: f64,
         /// Runs per figure (the best is reported).
-        #[arg(long, default_value_t = 3)]
+        #[arg(long, value_parser = hooke::readable::whole::<usize>, default_value_t = 3)]
         repeat: usize,
     },
     /// Largest stable dt per hard scene and integrator (bisection) against the theoretical
@@ -161,7 +161,7 @@ enum BenchCommand {
         #[arg(long, default_value = "assets/scenes/hard")]
         scenes: PathBuf,
         /// Steps per trial.
-        #[arg(long, default_value_t = 3000)]
+        #[arg(long, value_parser = hooke::readable::whole::<u64>, default_value_t = 3000)]
         steps: u64,
     },
 }
@@ -177,7 +177,7 @@ struct RunArgs {
     #[arg(long, value_parser = dt_value, allow_hyphen_values = true)]
     dt: Option<f64>,
     /// Number of steps to run.
-    #[arg(long, conflicts_with = "time")]
+    #[arg(long, value_parser = hooke::readable::whole::<u64>, conflicts_with = "time")]
     steps: Option<u64>,
     /// Simulated seconds to run (rounded to whole steps): a number or a fraction.
     #[arg(long, value_parser = time_value, allow_hyphen_values = true)]
@@ -200,35 +200,35 @@ struct RunArgs {
     #[arg(long, value_name = "STRAIN")]
     tear: Option<f64>,
     /// Implicit Euler: Newton steps per step (default 1, the classic linearised step).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_parser = hooke::readable::whole::<u32>, value_name = "N")]
     newton_iterations: Option<u32>,
     /// Projective dynamics: local/global iterations per step (default 10).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_parser = hooke::readable::whole::<u32>, value_name = "N")]
     pd_iterations: Option<u32>,
     /// XPBD: substeps per step (default 10).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_parser = hooke::readable::whole::<u32>, value_name = "N")]
     xpbd_substeps: Option<u32>,
     /// XPBD: constraint sweeps per substep (default 1; the least, with --xpbd-tolerance).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_parser = hooke::readable::whole::<u32>, value_name = "N")]
     xpbd_iterations: Option<u32>,
     /// XPBD: sweep each substep until the largest constraint error |C + α̃λ|/L is under TOL,
     /// up to --xpbd-max-sweeps (default 0: off).
     #[arg(long, value_name = "TOL")]
     xpbd_tolerance: Option<f64>,
     /// XPBD: the most sweeps a substep runs toward --xpbd-tolerance (default 100).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_parser = hooke::readable::whole::<u32>, value_name = "N")]
     xpbd_max_sweeps: Option<u32>,
     /// BDF2: local/global iterations per step (default 10).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_parser = hooke::readable::whole::<u32>, value_name = "N")]
     bdf2_iterations: Option<u32>,
     /// VBD: iterations per step (default 10).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_parser = hooke::readable::whole::<u32>, value_name = "N")]
     vbd_iterations: Option<u32>,
     /// VBD: Chebyshev acceleration's spectral radius estimate ρ in [0, 1) (default 0: off).
     #[arg(long, value_name = "RHO")]
     vbd_chebyshev: Option<f64>,
     /// Solver threads, 1 to 256 (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = hooke::readable::whole::<usize>)]
     threads: Option<usize>,
     /// Write the final state as CSV (id,x,y,vx,vy).
     #[arg(long)]

@@ -90,6 +90,36 @@ pub fn duration(text: &str) -> Result<f64, String> {
     Ok(value)
 }
 
+/// A count as people type it on the command line (`--steps`, `--threads`, the iteration
+/// counts): a whole number of 0 or more that fits `T`. The error names the rule the text
+/// breaks (a sign, a decimal point or an exponent, too many digits), where the parser's own
+/// "invalid digit found in string" named none.
+///
+/// ```
+/// assert_eq!(hooke::readable::whole::<u32>("12"), Ok(12));
+/// assert!(hooke::readable::whole::<u64>("-1").unwrap_err().contains("0 or more"));
+/// assert!(hooke::readable::whole::<u64>("1e3").unwrap_err().contains("exponent"));
+/// ```
+pub fn whole<T: TryFrom<u64>>(text: &str) -> Result<T, String> {
+    let text = text.trim();
+    let too_large = || format!("is too large, got {text}");
+    let n = text.parse::<u64>().map_err(|_| {
+        let number = text.parse::<f64>().is_ok_and(f64::is_finite);
+        if number && text.starts_with('-') {
+            format!("must be a whole number of 0 or more, got {text}")
+        } else if number && text.contains(['.', 'e', 'E']) {
+            format!(
+                "must be a whole number, written without a decimal point or an exponent, got {text}"
+            )
+        } else if !text.is_empty() && text.bytes().all(|b| b.is_ascii_digit()) {
+            too_large()
+        } else {
+            format!("must be a whole number, got {text}")
+        }
+    })?;
+    T::try_from(n).map_err(|_| too_large())
+}
+
 /// A number, or a fraction p/q of two numbers with q ≠ 0.
 fn fraction(text: &str) -> Result<f64, String> {
     let text = text.trim();
@@ -145,7 +175,25 @@ pub fn xpbd_softness(stats: &crate::solver::SolveStats) -> Option<String> {
 
 #[cfg(test)]
 mod tests {
-    use super::{duration, number, seconds};
+    use super::{duration, number, seconds, whole};
+
+    #[test]
+    fn whole_numbers_name_the_rule_they_break() {
+        assert_eq!(whole::<u64>("0"), Ok(0));
+        assert_eq!(whole::<usize>(" 7 "), Ok(7));
+        for (text, says) in [
+            ("-1", "0 or more"),
+            ("1.5", "decimal point"),
+            ("2e3", "exponent"),
+            ("99999999999999999999999", "too large"),
+            ("4294967296", "too large"),
+            ("ten", "must be a whole number, got ten"),
+            ("", "must be a whole number"),
+        ] {
+            let e = whole::<u32>(text).unwrap_err();
+            assert!(e.contains(says), "{text}: {e}");
+        }
+    }
 
     #[test]
     fn seconds_read_numbers_and_fractions() {

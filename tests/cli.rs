@@ -322,7 +322,7 @@ fn large_step_methods_report_their_iterations() {
 
 #[test]
 fn bad_flags() {
-    let cases: [(&[&str], &str); 18] = [
+    let cases: [(&[&str], &str); 19] = [
         (&["--dt", "-1"], "--dt must be finite and > 0, got -1"),
         (&["--dt", "1e19"], "--dt must be at most 1e9 s, got 1e19"),
         (
@@ -341,8 +341,18 @@ fn bad_flags() {
             &["--xpbd-substeps", "1000000"],
             "--xpbd-substeps must be between 1 and 100000",
         ),
-        (&["--newton-iterations", "-2"], "-2"),
-        (&["--xpbd-iterations", "many"], "many"),
+        (
+            &["--newton-iterations", "-2"],
+            "must be a whole number of 0 or more, got -2",
+        ),
+        (
+            &["--xpbd-iterations", "many"],
+            "must be a whole number, got many",
+        ),
+        (
+            &["--steps", "1.5"],
+            "must be a whole number, written without a decimal point or an exponent, got 1.5",
+        ),
         (&["--dt", "NaN"], "--dt must be finite and > 0, got NaN"),
         (
             &["--stiffness", "-3"],
@@ -619,8 +629,9 @@ fn bench_scale_writes_its_report() {
 /// `hooke bench perf` checks its flags before measuring anything.
 #[test]
 fn bad_bench_flags() {
-    let cases: [(&[&str], &str); 4] = [
+    let cases: [(&[&str], &str); 5] = [
         (&["--repeat", "0"], "--repeat must be at least 1"),
+        (&["--repeat", "2.5"], "written without a decimal point"),
         (
             &["--threads", "1,0"],
             "--threads must be between 1 and 256, got 0",
