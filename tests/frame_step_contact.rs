@@ -639,7 +639,7 @@ fn no_particle_passes_through_a_thin_segment_at_a_frames_step() {
 /// pass through: only a particle below the plank within its span counts.
 #[test]
 fn a_particle_pressed_by_a_heavier_one_stays_on_its_side_of_a_plank() {
-    let (r, level) = (0.01, 0.5);
+    let (level, r) = PLANK;
     let mut failures = vec![];
     let mut drops = 0;
     for integrator in Integrator::ALL {
@@ -647,26 +647,11 @@ fn a_particle_pressed_by_a_heavier_one_stays_on_its_side_of_a_plank() {
             for speed in [1.0, 3.0, 6.0, 10.0] {
                 for k in 0..20 {
                     // Where a free fall would end the step, above the light particle's centre.
-                    let end = level + r + 0.1 * r * (1 + k) as f64;
-                    let start = end + speed * dt + 9.8 * dt * dt;
-                    if start - (level + r) < 2.05 * r {
+                    let above = 0.1 * r * (1 + k) as f64;
+                    let Some(scene) = landing_on_a_plank(integrator, dt, speed, above) else {
                         // Starting in touch: the scene's check refuses it.
                         continue;
-                    }
-                    let mut scene = bare_scene(integrator, dt);
-                    scene.gravity = (0.0, -9.8);
-                    let mut light = particle(0.5, level + r, false);
-                    light.mass = 0.01;
-                    let mut heavy = particle(0.503, start, false);
-                    heavy.mass = 10.0;
-                    heavy.vel = (0.0, -speed);
-                    scene.particles = vec![light, heavy];
-                    scene.obstacles = vec![hooke::scene::ObstacleDef::Segment {
-                        a: (0.0, level),
-                        b: (1.0, level),
-                        thickness: 0.0,
-                    }];
-                    scene.contact = pairs_on(r, 0.5);
+                    };
                     let mut app = app_with(scene);
                     drops += 1;
                     for s in 0..10 {
@@ -676,7 +661,7 @@ fn a_particle_pressed_by_a_heavier_one_stays_on_its_side_of_a_plank() {
                             failures.push(format!(
                                 "{integrator:?} at dt = {dt:.4}, {speed} m/s, ending {:.1}r \
                                  above: the light particle at {p} after step {s}",
-                                (end - level - r) / r
+                                above / r
                             ));
                             break;
                         }

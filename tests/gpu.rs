@@ -882,23 +882,9 @@ fn xpbd_contact_on_the_card_matches_the_cpu() {
 #[test]
 fn a_push_past_a_surface_on_the_card_stays_on_its_side() {
     let Some(gpu) = card() else { return };
-    let (r, level) = (0.01, 0.5);
-    let plank = move |integrator: Integrator, dt: f64, speed: f64, above: f64| {
-        let mut scene = bare_scene(integrator, dt);
-        scene.gravity = (0.0, -9.8);
-        let mut light = particle(0.5, level + r, false);
-        light.mass = 0.01;
-        let mut heavy = particle(0.503, level + r + above + speed * dt + 9.8 * dt * dt, false);
-        heavy.mass = 10.0;
-        heavy.vel = (0.0, -speed);
-        scene.particles = vec![light, heavy];
-        scene.obstacles = vec![hooke::scene::ObstacleDef::Segment {
-            a: (0.0, level),
-            b: (1.0, level),
-            thickness: 0.0,
-        }];
-        scene.contact = pairs_on(r, 0.5);
-        app_with(scene)
+    let (level, r) = PLANK;
+    let plank = move |integrator, dt, speed, above| {
+        app_with(landing_on_a_plank(integrator, dt, speed, above).expect("starts apart"))
     };
     let through_box = move || {
         let mut scene = bare_scene(Integrator::SymplecticEuler, 0.01);

@@ -231,3 +231,38 @@ pub fn kinetic(s: &Solver) -> f64 {
         .map(|(v, m)| 0.5 * m * v.length_squared())
         .sum()
 }
+
+/// The plank of [`landing_on_a_plank`]: its level, m, and the contact radius r, m.
+pub const PLANK: (f64, f64) = (0.5, 0.01);
+
+/// A 10 g particle resting on a level plank of no thickness ([`PLANK`]: y = 0.5, r = 1 cm, pairs
+/// on), and a 10 kg one 3 mm off its centre falling onto it at `speed`, placed so that a free
+/// fall would end its first step `above` over the light one's centre; `None` where it would
+/// start within 2r of the light one (the scene's check refuses such a start).
+pub fn landing_on_a_plank(
+    integrator: Integrator,
+    dt: f64,
+    speed: f64,
+    above: f64,
+) -> Option<Scene> {
+    let (level, r) = PLANK;
+    let start = level + r + above + speed * dt + 9.8 * dt * dt;
+    if start - (level + r) < 2.05 * r {
+        return None;
+    }
+    let mut scene = bare_scene(integrator, dt);
+    scene.gravity = (0.0, -9.8);
+    let mut light = particle(0.5, level + r, false);
+    light.mass = 0.01;
+    let mut heavy = particle(0.503, start, false);
+    heavy.mass = 10.0;
+    heavy.vel = (0.0, -speed);
+    scene.particles = vec![light, heavy];
+    scene.obstacles = vec![hooke::scene::ObstacleDef::Segment {
+        a: (0.0, level),
+        b: (1.0, level),
+        thickness: 0.0,
+    }];
+    scene.contact = pairs_on(r, 0.5);
+    Some(scene)
+}
