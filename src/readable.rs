@@ -90,10 +90,39 @@ pub fn duration(text: &str) -> Result<f64, String> {
     Ok(value)
 }
 
+/// What keeps a text from being a whole number of 0 or more that fits its type: what
+/// [`whole`] says on the command line and the scene loader says of a whole-number field.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NotWhole {
+    /// A number below 0 (`-2`).
+    Negative,
+    /// A number with a decimal point or an exponent (`1.5`, `1e3`).
+    Fraction,
+    /// Digits alone, more than the type holds.
+    TooLarge,
+    /// No number at all (`many`, `NaN`, the empty text).
+    NotANumber,
+}
+
+impl NotWhole {
+    /// Why `text` (trimmed), which did not parse as the whole number wanted, is not one.
+    pub fn of(text: &str) -> NotWhole {
+        let number = text.parse::<f64>().is_ok_and(f64::is_finite);
+        if number && text.starts_with('-') {
+            NotWhole::Negative
+        } else if number && text.contains(['.', 'e', 'E']) {
+            NotWhole::Fraction
+        } else if !text.is_empty() && text.bytes().all(|b| b.is_ascii_digit()) {
+            NotWhole::TooLarge
+        } else {
+            NotWhole::NotANumber
+        }
+    }
+}
+
 /// A count as people type it on the command line (`--steps`, `--threads`, the iteration
 /// counts): a whole number of 0 or more that fits `T`. The error names the rule the text
-/// breaks (a sign, a decimal point or an exponent, too many digits), where the parser's own
-/// "invalid digit found in string" named none.
+/// breaks ([`NotWhole`]), where the parser's own "invalid digit found in string" named none.
 ///
 /// ```
 /// assert_eq!(hooke::readable::whole::<u32>("12"), Ok(12));
@@ -102,22 +131,16 @@ pub fn duration(text: &str) -> Result<f64, String> {
 /// ```
 pub fn whole<T: TryFrom<u64>>(text: &str) -> Result<T, String> {
     let text = text.trim();
-    let too_large = || format!("is too large, got {text}");
-    let n = text.parse::<u64>().map_err(|_| {
-        let number = text.parse::<f64>().is_ok_and(f64::is_finite);
-        if number && text.starts_with('-') {
-            format!("must be a whole number of 0 or more, got {text}")
-        } else if number && text.contains(['.', 'e', 'E']) {
-            format!(
-                "must be a whole number, written without a decimal point or an exponent, got {text}"
-            )
-        } else if !text.is_empty() && text.bytes().all(|b| b.is_ascii_digit()) {
-            too_large()
-        } else {
-            format!("must be a whole number, got {text}")
-        }
-    })?;
-    T::try_from(n).map_err(|_| too_large())
+    let not = |why| match why {
+        NotWhole::Negative => format!("must be a whole number of 0 or more, got {text}"),
+        NotWhole::Fraction => format!(
+            "must be a whole number, written without a decimal point or an exponent, got {text}"
+        ),
+        NotWhole::TooLarge => format!("is too large, got {text}"),
+        NotWhole::NotANumber => format!("must be a whole number, got {text}"),
+    };
+    let n = text.parse::<u64>().map_err(|_| not(NotWhole::of(text)))?;
+    T::try_from(n).map_err(|_| not(NotWhole::TooLarge))
 }
 
 /// A number, or a fraction p/q of two numbers with q ≠ 0.

@@ -7,6 +7,8 @@
 //! written: `(pos: (0.5, 0.5), masss: 5.0)` would weigh 1 kg. RON reports such a field with the
 //! list of the names it expected; this module picks the near ones out of that list.
 
+use crate::readable::NotWhole;
+
 /// The message for a RON error at `line`:`col` (1-based) of `text`: ron's own words, except for
 /// an unknown field or variant, which is named with its place in the scene, the near names, and
 /// every name allowed there; a missing field, named with its place; and the slips of
@@ -158,14 +160,11 @@ fn whole_number(before: &str, after: &str) -> Option<String> {
     if field.is_empty() || value.is_empty() {
         return None;
     }
-    let how = if value.starts_with('-') {
-        " of 0 or more"
-    } else if value.parse::<f64>().is_ok_and(f64::is_finite) && value.contains(['.', 'e', 'E']) {
-        ", written without a decimal point or an exponent"
-    } else if value.chars().all(|c| c.is_ascii_digit()) {
-        " no larger than its field holds"
-    } else {
-        ""
+    let how = match NotWhole::of(&value) {
+        NotWhole::Negative => " of 0 or more",
+        NotWhole::Fraction => ", written without a decimal point or an exponent",
+        NotWhole::TooLarge => " no larger than its field holds",
+        NotWhole::NotANumber => "",
     };
     Some(format!(
         "`{field}` takes a whole number{how}, not `{value}`"
