@@ -266,3 +266,14 @@ pub fn landing_on_a_plank(
     scene.contact = pairs_on(r, 0.5);
     Some(scene)
 }
+
+/// The plank of [`landing_on_a_plank`] made a slab r thick, its top at the plank's level: a
+/// closed shape thinner than the pair solve's push of up to 3r.
+pub fn plank_as_slab(scene: &mut Scene) {
+    let (level, r) = PLANK;
+    scene.obstacles = vec![hooke::scene::ObstacleDef::Box {
+        center: (0.5, level - 0.5 * r),
+        half: (0.5, 0.5 * r),
+        angle: 0.0,
+    }];
+}

@@ -131,7 +131,10 @@ impl Polygon {
             let l = d.length();
             if l < nearest {
                 nearest = l;
-                toward = if l > 0.0 { d / l } else { n };
+                // On the edge itself, to round-off (a nanometre: a path caught where it
+                // enters, `Placed::first_hit`), the direction from it is noise: the edge's
+                // normal.
+                toward = if l > 1e-9 { d / l } else { n };
             }
         }
         if inside {
@@ -335,15 +338,28 @@ impl Placed {
         Some(Touch { depth, normal })
     }
 
-    /// Where the path `from` → `to` crosses a segment's line within its length, as a fraction
-    /// of the path in (0, 1]; `None` for a closed shape, a path that stays on one side, and a
-    /// start on the line (which has no side to keep).
+    /// Where the path `from` → `to` crosses the shape itself, as a fraction of the path: a
+    /// segment's line within its length (in (0, 1]), or a closed shape passed through from
+    /// side to side (in [0, 1]). `None` for a path that stays on one side, a start on a
+    /// segment's line (which has no side to keep), and a path that starts or ends inside a
+    /// closed shape.
     pub fn crossing(&self, from: DVec2, to: DVec2) -> Option<f64> {
         match self.shape.for_contact() {
             Shape::Segment { a, b, .. } => {
                 line_crossing(self.local(from), self.local(to), a, b).filter(|&t| t > 0.0)
             }
-            _ => None,
+            _ => self.passes_through(from, to),
+        }
+    }
+
+    /// `p`, or for a point inside a closed shape, the point just outside it by the nearest
+    /// surface: the side a path that starts inside is taken to come from.
+    pub fn out_by_nearest(&self, p: DVec2) -> DVec2 {
+        let (d, n) = self.distance(p);
+        if d < 0.0 && !self.is_segment() {
+            p + n * (0.5 * MIN_THICKNESS - d)
+        } else {
+            p
         }
     }
 
@@ -434,23 +450,26 @@ impl Placed {
 
     /// The first fraction t in [0, 1] of the path `from` → `to` at which a particle of radius
     /// `r` touches the shape, for a path that starts outside it; `None` when the path stays
-    /// clear or starts in contact (except for a path that crosses a segment's line). The
-    /// shape is taken at its pose (its motion over the step is small against a thrown
-    /// particle's). This is what keeps a fast particle from passing through a thin obstacle
-    /// within one step.
-    pub fn first_hit(&self, from: DVec2, to: DVec2, r: f64) -> Option<f64> {
+    /// clear. A path that starts in contact is already touching: it is caught only where it
+    /// crosses the shape itself, a segment's line or a closed shape from side to side
+    /// ([`Self::crossing`]); a path that ends inside a closed shape is left to
+    /// [`Self::touch`]. The shape is taken at its pose (its motion over the step is small
+    /// against a thrown particle's). This is what keeps a fast particle from passing through
+    /// a thin obstacle within one step.
+    pub fn first_hit(&self, from: DVec2, to: DVec2, r: f64) -> Option<Hit> {
         let (p0, p1) = (self.local(from), self.local(to));
         // A start on the surface, to round-off (a particle put there by the last step), is a
         // start in contact.
         if self.distance(from).0 < r + 0.5 * MIN_THICKNESS {
-            // Already in contact: only a segment can still be passed through, by crossing its
-            // line (a particle resting on a thin one moves more than its thickness a step).
+            // A particle resting on a thin obstacle moves more than its thickness in a step
+            // when something strikes it: a disc of radius r, struck at 2 m/s for 1/60 s, is
+            // passed clean through.
             return match self.shape.for_contact() {
-                Shape::Segment { a, b, .. } => line_crossing(p0, p1, a, b),
-                _ => None,
+                Shape::Segment { a, b, .. } => line_crossing(p0, p1, a, b).map(Hit::along),
+                _ => self.passes_through(from, to).map(Hit::through_shape),
             };
         }
-        match self.shape.for_contact() {
+        let t = match self.shape.for_contact() {
             Shape::Circle { radius } => ray_circle(p0, p1, DVec2::ZERO, radius + r),
             Shape::Segment { a, b, thickness } => ray_capsule(p0, p1, a, b, thickness + r),
             Shape::Box { half } => ray_rounded_box(p0, p1, half, r),
@@ -458,7 +477,57 @@ impl Placed {
                 .edges()
                 .filter_map(|(a, b)| ray_capsule(p0, p1, a, b, r))
                 .min_by(f64::total_cmp),
+        };
+        t.map(Hit::along)
+    }
+
+    /// Where a path that starts and ends outside a closed shape passes through it: the
+    /// fraction of the path at which it enters, in [0, 1]. `None` for a segment
+    /// ([`line_crossing`] reads its side), and for a path that misses the shape or ends in it.
+    fn passes_through(&self, from: DVec2, to: DVec2) -> Option<f64> {
+        let (d0, n0) = self.distance(from);
+        // How far the path goes toward the surface point nearest its start. The shape (convex)
+        // lies wholly behind the tangent there: a path that stops short of it, as a resting
+        // particle's does, cannot enter.
+        let toward = -(to - from).dot(n0);
+        if d0 < -0.5 * MIN_THICKNESS || toward < d0 || self.distance(to).0 < 0.0 {
+            return None;
         }
+        if d0 < 0.5 * MIN_THICKNESS {
+            // On the surface (a point particle resting on it): in at once, if it heads in.
+            return (toward > 0.0).then_some(0.0);
+        }
+        let (p0, p1) = (self.local(from), self.local(to));
+        match self.shape.for_contact() {
+            Shape::Circle { radius } => ray_circle(p0, p1, DVec2::ZERO, radius),
+            Shape::Box { half } => ray_rounded_box(p0, p1, half, 0.0),
+            Shape::Polygon(p) => p
+                .edges()
+                .filter_map(|(a, b)| ray_capsule(p0, p1, a, b, 0.0))
+                .min_by(f64::total_cmp),
+            Shape::Segment { .. } => None,
+        }
+    }
+}
+
+/// Where a path first touches an obstacle ([`Placed::first_hit`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hit {
+    /// The fraction of the path, in [0, 1].
+    pub t: f64,
+    /// The path started in contact and passes through a closed shape: the hit is where it
+    /// enters the shape itself, and its side is the one the path came from, whatever the
+    /// particle's heading.
+    pub through: bool,
+}
+
+impl Hit {
+    fn along(t: f64) -> Self {
+        Hit { t, through: false }
+    }
+
+    fn through_shape(t: f64) -> Self {
+        Hit { t, through: true }
     }
 }
 
@@ -749,7 +818,8 @@ mod tests {
         );
         let t = p
             .first_hit(DVec2::new(1.0, 4.0), DVec2::new(1.0, -2.0), 0.1)
-            .expect("hits");
+            .expect("hits")
+            .t;
         let hit = DVec2::new(1.0, 4.0) + DVec2::new(0.0, -6.0) * t;
         assert!((p.distance(hit).0 - 0.1).abs() < 1e-12, "{hit}");
         assert!(Polygon::new(&[DVec2::ZERO, DVec2::X, DVec2::new(0.2, 0.2), DVec2::Y]).is_err());
@@ -769,10 +839,68 @@ mod tests {
         );
         // 10 m/s for 1/60 s: 0.17 m, straight through the line.
         let (from, to) = (DVec2::new(0.3, 0.4), DVec2::new(0.3, 0.4 - 10.0 / 60.0));
-        let t = s.first_hit(from, to, 0.0).expect("crosses");
+        let t = s.first_hit(from, to, 0.0).expect("crosses").t;
         let hit = from + (to - from) * t;
         assert!(s.distance(hit).0.abs() < 1e-12, "{hit}");
         assert_eq!(s.first_hit(from, DVec2::new(0.3, 0.35), 0.0), None);
+    }
+
+    /// A particle resting on a thin closed shape, struck through it within a step, is caught
+    /// where its path enters the shape itself: a disc of radius r, a turned box r thick and a
+    /// polygon r thick, from a start in contact (r out, and on the surface for a point), on
+    /// paths that end clear of the far side. A path that ends inside is left to `touch`, and
+    /// one that heads away or along the surface is not caught.
+    #[test]
+    fn a_path_through_a_thin_closed_shape_from_contact_is_caught() {
+        let r = 0.01;
+        let corners = [
+            DVec2::new(-0.2, -0.005),
+            DVec2::new(0.2, -0.005),
+            DVec2::new(0.2, 0.005),
+            DVec2::new(-0.2, 0.005),
+        ];
+        let shapes = [
+            at(Shape::Circle { radius: r }, DVec2::new(0.5, 0.4), 0.0),
+            at(
+                Shape::Box {
+                    half: DVec2::new(0.2, 0.005),
+                },
+                DVec2::new(0.5, 0.4),
+                0.3,
+            ),
+            at(
+                Shape::Polygon(Polygon::new(&corners).unwrap()),
+                DVec2::new(0.5, 0.4),
+                -0.2,
+            ),
+        ];
+        for o in &shapes {
+            // The top of the shape, straight above its centre in its own frame.
+            let up = o
+                .distance(o.pose.center + DVec2::from_angle(o.pose.angle).perp())
+                .1;
+            let (d, _) = o.distance(o.pose.center + up * 0.001);
+            let top = o.pose.center + up * (0.001 - d);
+            for radius in [r, 0.0] {
+                let from = top + up * radius;
+                for travel in [3.0 * r, 5.0 * r, 0.2] {
+                    let to = from - up * travel + up.perp() * 0.2 * travel;
+                    let hit = o.first_hit(from, to, radius).expect("passes through");
+                    assert!(hit.through, "{:?}", o.shape);
+                    let entry = from + (to - from) * hit.t;
+                    assert!(o.distance(entry).0.abs() < 1e-9, "{entry}");
+                    assert!(
+                        (entry - o.pose.center).dot(up) > 0.0,
+                        "enters on the start's side: {entry}"
+                    );
+                }
+                // Ends inside: `touch` puts it out.
+                assert_eq!(o.first_hit(from, top - up * 0.006, radius), None);
+                // Heads away, or slides along the surface.
+                assert_eq!(o.first_hit(from, from + up * 0.1, radius), None);
+                assert_eq!(o.first_hit(from, from + up.perp() * 0.001, radius), None);
+            }
+        }
     }
 
     #[test]

@@ -13,7 +13,7 @@
 //! only shrinks in size (|e·vₙ| ≤ |vₙ| with e ≤ 1), the tangential part only shrinks, and the
 //! position moves only back toward the surface, by at most the step's own travel into it.
 
-use super::obstacle::{Placed, SLOP, Surface, respond};
+use super::obstacle::{Hit, Placed, SLOP, Surface, respond};
 use super::reaction::Reactions;
 use crate::solver::forces::sweep::Motion;
 use crate::solver::threads::Threads;
@@ -120,11 +120,12 @@ impl Surroundings<'_> {
     /// obstacles by the radius (`reach`: each obstacle's [`reaches`] at it), positions only:
     /// what the pair solve holds its particles to between its iterations, so that a particle
     /// pressed against the ground by another stays on it and the other moves. Out by the
-    /// nearest surface, but on `from`'s side ([`Placed::touch`]); a push across a segment's
-    /// line goes back to the line first, then out on that side. A push of up to 3r (the pair
-    /// solve's over-relaxation) can carry a light particle under a heavy one across a thin
-    /// plank, even clear of its far side, or past a shape's middle: out by the nearest surface
-    /// alone it went on through.
+    /// nearest surface, but on `from`'s side ([`Placed::touch`]); a push across the shape
+    /// itself (a segment's line, or a closed shape from side to side, [`Placed::crossing`])
+    /// goes back to where it crossed first, then out on that side. A push of up to 3r (the
+    /// pair solve's over-relaxation) can carry a light particle under a heavy one across a
+    /// thin plank, even clear of its far side, past a shape's middle, or through a thin box:
+    /// out by the nearest surface alone it went on through.
     pub(crate) fn keep_out(&self, mut p: DVec2, from: DVec2, reach: &[f64]) -> DVec2 {
         let (r, push) = (self.radius(), p - from);
         let travel = push.abs().element_sum();
@@ -133,8 +134,12 @@ impl Surroundings<'_> {
             if (p - o.pose.center).length_squared() > within * within {
                 continue;
             }
+            // A start inside a closed shape (an explicit step's update carried the particle
+            // in; the obstacle pass, after this one, puts it out) has its side at its nearest
+            // surface.
+            let from = o.out_by_nearest(from);
             if let Some(t) = o.crossing(from, p) {
-                p = from + push * t;
+                p = from + (p - from) * t;
             }
             if let Some(touch) = o.touch(p, from, push, r) {
                 p += touch.normal * touch.depth;
@@ -395,9 +400,9 @@ pub(crate) fn place(
         .iter()
         .enumerate()
         .filter(|&(k, _)| near(k, *x))
-        .filter_map(|(i, o)| o.first_hit(from, *x, r).map(|t| (t, i)))
-        .min_by(|a, b| a.0.total_cmp(&b.0));
-    if let Some((t, i)) = first {
+        .filter_map(|(i, o)| o.first_hit(from, *x, r).map(|hit| (hit, i)))
+        .min_by(|a, b| a.0.t.total_cmp(&b.0.t));
+    if let Some((Hit { t, through }, i)) = first {
         let o = &obstacles[i];
         let step = *x - from;
         let hit = from + step * t;
@@ -407,8 +412,9 @@ pub(crate) fn place(
         // Euler's gas ball went through a slope at 1/60 s). A start on its line has no side of
         // its own and takes the one it heads from. A closed shape keeps the heading: facing its
         // hit to the path made BDF2's settled pile creep up (docs/performance-log.md,
-        // 2026-12-05, the thrown box under implicit Euler).
-        let toward = if t > 0.0 && o.is_segment() {
+        // 2026-12-05, the thrown box under implicit Euler), except on a path through it from
+        // a start in contact, which enters where the path says.
+        let toward = if through || (t > 0.0 && o.is_segment()) {
             step
         } else {
             heading
@@ -595,11 +601,12 @@ mod tests {
     }
 
     /// The pair solve's hold puts a pushed particle back on the side it was pushed from: a
-    /// particle on or near a disc of radius 2r, a turned box 4r thick, a plank of no thickness and
-    /// a thick one, pushed by up to 3r past the middle or across the line (a push that ends
-    /// clear of the plank on its far side, too), is put out no nearer than r to the tangent at
-    /// the surface point nearest its start, on the start's side. By the nearest surface it
-    /// went out the far side (a light particle under a heavy one through a plank:
+    /// particle near, on or just inside a disc of radius 2r, a turned box 4r thick, a plank of
+    /// no thickness (near it only) and a thick one, a disc of radius r and a turned box r
+    /// thick, pushed by up to 3r past the middle, across the line, or through the thin shapes
+    /// and clear of their far sides, is put out no nearer than r to the tangent at the surface
+    /// point nearest its start, on the start's side. By the nearest surface it went out the
+    /// far side (a light particle under a heavy one through a plank or a thin box:
     /// tests/frame_step_contact.rs).
     #[test]
     fn the_pair_solves_hold_puts_a_pushed_particle_back_on_its_side() {
@@ -631,6 +638,16 @@ mod tests {
                 DVec2::new(3.0, 0.0),
                 -0.3,
             ),
+            // Thinner than the push: a disc of radius r and a turned box r thick, pushed
+            // through from side to side.
+            Placed::at(Shape::Circle { radius: r }, DVec2::new(4.0, 0.0), 0.0),
+            Placed::at(
+                Shape::Box {
+                    half: DVec2::new(0.2, 0.5 * r),
+                },
+                DVec2::new(5.0, 0.0),
+                0.4,
+            ),
         ];
         let mut tried = 0;
         for o in &obstacles {
@@ -646,13 +663,21 @@ mod tests {
             let reach = reaches(std::slice::from_ref(o), r);
             for k in 0..12 {
                 let dir = DVec2::from_angle(k as f64 * std::f64::consts::TAU / 12.0);
-                for gap in [0.5 * r, r, 1.5 * r] {
+                // A start inside (an explicit step's update carried the particle 1 mm in
+                // before the pair pass), on the surface, and out.
+                for gap in [-0.1 * r, 0.0, 0.5 * r, r, 1.5 * r] {
+                    let line =
+                        matches!(o.shape, Shape::Segment { thickness, .. } if thickness == 0.0);
+                    if gap <= 0.0 && line {
+                        // A start on a line has no side of its own.
+                        continue;
+                    }
                     // A start `gap` out from the surface point nearest a point near the middle.
-                    let (d, n) = o.distance(o.pose.center + dir * 0.005);
-                    let surface = o.pose.center + dir * 0.005 - n * d;
+                    let (d, n) = o.distance(o.pose.center + dir * 0.002);
+                    let surface = o.pose.center + dir * 0.002 - n * d;
                     let from = surface + n * gap;
-                    for push in [0.5, 1.0, 1.5, 2.5, 3.0] {
-                        // Pushed toward and past the middle (not onto the disc's centre, where
+                    for push in [0.5, 0.9, 1.5, 2.5, 3.0] {
+                        // Pushed toward and past the middle (not onto a disc's centre, where
                         // every way out is the nearest), by up to 3r beyond the line.
                         let p = from - n * (gap + push * r);
                         let kept = around.keep_out(p, from, &reach);
@@ -668,6 +693,6 @@ mod tests {
                 }
             }
         }
-        assert_eq!(tried, 4 * 12 * 3 * 5);
+        assert_eq!(tried, (5 * 5 + 3) * 12 * 5);
     }
 }

@@ -282,12 +282,58 @@ fn ray_rounded_box(p0: vec2<real>, p1: vec2<real>, half: vec2<real>, r: real) ->
     return best;
 }
 
+// Where a path that starts and ends outside a closed shape passes through it: where it enters,
+// in [0, 1] (`Placed::passes_through`); NONE for a segment. A path that stops short of the
+// tangent at the surface point nearest its start cannot enter (the shape is convex); a start on
+// the surface enters at once if it heads in.
+fn passes_through(o: Obstacle, start: vec2<real>, to: vec2<real>) -> real {
+    if (is_segment(o)) { return NONE; }
+    let back = distance_to(o, start);
+    let toward = -dot(to - start, back.n);
+    let half = real(0.5) * MIN_THICKNESS;
+    if (back.d < -half || toward < back.d || distance_to(o, to).d < real(0.0)) { return NONE; }
+    if (back.d < half) {
+        if (toward > real(0.0)) { return real(0.0); }
+        return NONE;
+    }
+    let p0 = local(o, start);
+    let p1 = local(o, to);
+    if (is_circle(o)) { return ray_circle(p0, p1, vec2<real>(0.0, 0.0), o.size); }
+    return ray_rounded_box(p0, p1, o.a, real(0.0));
+}
+
+// Where the path crosses the shape itself: a segment's line, or a closed shape from side to
+// side (`Placed::crossing`); NONE when it does not.
+fn crossing(o: Obstacle, start: vec2<real>, to: vec2<real>) -> real {
+    if (is_segment(o)) {
+        let t = line_crossing(local(o, start), local(o, to), o.a, o.b);
+        if (t > real(0.0)) { return t; }
+        return NONE;
+    }
+    return passes_through(o, start, to);
+}
+
+// `at`, or for a point inside a closed shape, the point just outside it by the nearest surface
+// (`Placed::out_by_nearest`).
+fn out_by_nearest(o: Obstacle, at: vec2<real>) -> vec2<real> {
+    let dn = distance_to(o, at);
+    if (dn.d < real(0.0) && !is_segment(o)) {
+        return at + dn.n * (real(0.5) * MIN_THICKNESS - dn.d);
+    }
+    return at;
+}
+
+// Whether a path from `start` is in contact with the shape already (`Placed::first_hit`).
+fn starts_in_contact(o: Obstacle, start: vec2<real>, r: real) -> bool {
+    return distance_to(o, start).d < r + real(0.5) * MIN_THICKNESS;
+}
+
 fn first_hit(o: Obstacle, start: vec2<real>, to: vec2<real>, r: real) -> real {
     let p0 = local(o, start);
     let p1 = local(o, to);
-    if (distance_to(o, start).d < r + real(0.5) * MIN_THICKNESS) {
+    if (starts_in_contact(o, start, r)) {
         if (is_segment(o)) { return line_crossing(p0, p1, o.a, o.b); }
-        return NONE;
+        return passes_through(o, start, to);
     }
     if (is_circle(o)) { return ray_circle(p0, p1, vec2<real>(0.0, 0.0), o.size + r); }
     if (is_segment(o)) { return ray_capsule(p0, p1, o.a, o.b, o.size + r); }
@@ -356,7 +402,10 @@ fn place(at: vec2<real>, start: vec2<real>, heading: vec2<real>, v_in: vec2<real
         let o = obstacles[best];
         let step = x - start;
         let hit = start + step * best_t;
-        let n = hit_normal(o, hit, heading);
+        // A path through a closed shape from a start in contact enters where the path says.
+        var toward = heading;
+        if (!is_segment(o) && starts_in_contact(o, start, r)) { toward = step; }
+        let n = hit_normal(o, hit, toward);
         let rest = step * (real(1.0) - best_t);
         let into = max(-dot(rest, n), real(0.0));
         x = hit + rest + n * into;

@@ -84,19 +84,19 @@ fn joined(i: u32, j: u32) -> bool {
 }
 
 // `at`, pushed there from `start`, put back out of the obstacles and (when contact is set)
-// the ground by the radius, positions only: by the nearest surface on `start`'s side, a push
-// across a segment's line back to the line first (`Surroundings::keep_out`).
+// the ground by the radius, positions only: by the nearest surface on `start`'s side (a start
+// inside a closed shape on its nearest surface's), a push across the shape itself back to
+// where it crossed first (`Surroundings::keep_out`).
 fn keep_out(at: vec2<real>, start: vec2<real>) -> vec2<real> {
     var q = at;
     let r = p.radius;
     let push = at - start;
     for (var k = 0u; k < p.obstacles; k++) {
         let o = obstacles[k];
-        if (is_segment(o)) {
-            let t = line_crossing(local(o, start), local(o, q), o.a, o.b);
-            if (t > real(0.0)) { q = start + push * t; }
-        }
-        let touched = touch(o, q, start, push, r);
+        let side = out_by_nearest(o, start);
+        let t = crossing(o, side, q);
+        if (t >= real(0.0)) { q = side + (q - side) * t; }
+        let touched = touch(o, q, side, push, r);
         if (touched.hit) { q += touched.normal * touched.depth; }
     }
     if ((p.flags & 1u) != 0u) { q.y = max(q.y, p.ground + r); }
