@@ -697,7 +697,6 @@ fn a_particle_pressed_by_a_heavier_one_stays_on_its_side_of_a_thin_obstacle() {
 fn a_particle_resting_on_a_thin_shape_stays_on_it_when_struck() {
     use hooke::scene::ObstacleDef;
     let r = 0.01;
-    let slab = [(-0.3, -0.005), (0.3, -0.005), (0.3, 0.005), (-0.3, 0.005)];
     // Each shape about (0.5, 0.4), its top's normal, and its half-length across that.
     let shapes = [
         (
@@ -721,7 +720,7 @@ fn a_particle_resting_on_a_thin_shape_stays_on_it_when_struck() {
         (
             ObstacleDef::Polygon {
                 center: (0.5, 0.4),
-                corners: slab.map(|(x, y)| (x, 2.0 * y)).to_vec(),
+                corners: vec![(-0.3, -r), (0.3, -r), (0.3, r), (-0.3, r)],
                 angle: -0.2,
             },
             -0.2,

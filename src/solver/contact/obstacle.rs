@@ -348,7 +348,7 @@ impl Placed {
             Shape::Segment { a, b, .. } => {
                 line_crossing(self.local(from), self.local(to), a, b).filter(|&t| t > 0.0)
             }
-            _ => self.passes_through(from, to),
+            _ => self.passes_through(from, self.distance(from), to),
         }
     }
 
@@ -457,19 +457,28 @@ impl Placed {
     /// against a thrown particle's). This is what keeps a fast particle from passing through
     /// a thin obstacle within one step.
     pub fn first_hit(&self, from: DVec2, to: DVec2, r: f64) -> Option<Hit> {
-        let (p0, p1) = (self.local(from), self.local(to));
+        let start = self.distance(from);
         // A start on the surface, to round-off (a particle put there by the last step), is a
         // start in contact.
-        if self.distance(from).0 < r + 0.5 * MIN_THICKNESS {
+        if start.0 < r + 0.5 * MIN_THICKNESS {
             // A particle resting on a thin obstacle moves more than its thickness in a step
             // when something strikes it: a disc of radius r, struck at 2 m/s for 1/60 s, is
             // passed clean through.
             return match self.shape.for_contact() {
-                Shape::Segment { a, b, .. } => line_crossing(p0, p1, a, b).map(Hit::along),
-                _ => self.passes_through(from, to).map(Hit::through_shape),
+                Shape::Segment { a, b, .. } => {
+                    line_crossing(self.local(from), self.local(to), a, b).map(Hit::along)
+                }
+                _ => self.passes_through(from, start, to).map(Hit::through_shape),
             };
         }
-        let t = match self.shape.for_contact() {
+        self.sweep(from, to, r).map(Hit::along)
+    }
+
+    /// The first fraction t in [0, 1] of the path `from` → `to` that comes within `r` of the
+    /// shape (the shape itself for `r` = 0), for a start farther out.
+    fn sweep(&self, from: DVec2, to: DVec2, r: f64) -> Option<f64> {
+        let (p0, p1) = (self.local(from), self.local(to));
+        match self.shape.for_contact() {
             Shape::Circle { radius } => ray_circle(p0, p1, DVec2::ZERO, radius + r),
             Shape::Segment { a, b, thickness } => ray_capsule(p0, p1, a, b, thickness + r),
             Shape::Box { half } => ray_rounded_box(p0, p1, half, r),
@@ -477,15 +486,17 @@ impl Placed {
                 .edges()
                 .filter_map(|(a, b)| ray_capsule(p0, p1, a, b, r))
                 .min_by(f64::total_cmp),
-        };
-        t.map(Hit::along)
+        }
     }
 
     /// Where a path that starts and ends outside a closed shape passes through it: the
-    /// fraction of the path at which it enters, in [0, 1]. `None` for a segment
-    /// ([`line_crossing`] reads its side), and for a path that misses the shape or ends in it.
-    fn passes_through(&self, from: DVec2, to: DVec2) -> Option<f64> {
-        let (d0, n0) = self.distance(from);
+    /// fraction of the path at which it enters, in [0, 1]; `start` is the shape's
+    /// [`Self::distance`] from `from`. `None` for a path that misses the shape or ends in it
+    /// (and for a segment, whose side [`line_crossing`] reads).
+    fn passes_through(&self, from: DVec2, (d0, n0): (f64, DVec2), to: DVec2) -> Option<f64> {
+        if self.is_segment() {
+            return None;
+        }
         // How far the path goes toward the surface point nearest its start. The shape (convex)
         // lies wholly behind the tangent there: a path that stops short of it, as a resting
         // particle's does, cannot enter.
@@ -497,16 +508,7 @@ impl Placed {
             // On the surface (a point particle resting on it): in at once, if it heads in.
             return (toward > 0.0).then_some(0.0);
         }
-        let (p0, p1) = (self.local(from), self.local(to));
-        match self.shape.for_contact() {
-            Shape::Circle { radius } => ray_circle(p0, p1, DVec2::ZERO, radius),
-            Shape::Box { half } => ray_rounded_box(p0, p1, half, 0.0),
-            Shape::Polygon(p) => p
-                .edges()
-                .filter_map(|(a, b)| ray_capsule(p0, p1, a, b, 0.0))
-                .min_by(f64::total_cmp),
-            Shape::Segment { .. } => None,
-        }
+        self.sweep(from, to, 0.0)
     }
 }
 

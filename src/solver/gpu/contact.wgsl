@@ -282,13 +282,20 @@ fn ray_rounded_box(p0: vec2<real>, p1: vec2<real>, half: vec2<real>, r: real) ->
     return best;
 }
 
+// The first t in [0, 1] at which the path p0 → p1 (in the obstacle's frame) comes within `r`
+// of the shape (the shape itself for r = 0), for a start farther out (`Placed::sweep`).
+fn sweep(o: Obstacle, p0: vec2<real>, p1: vec2<real>, r: real) -> real {
+    if (is_circle(o)) { return ray_circle(p0, p1, vec2<real>(0.0, 0.0), o.size + r); }
+    if (is_segment(o)) { return ray_capsule(p0, p1, o.a, o.b, o.size + r); }
+    return ray_rounded_box(p0, p1, o.a, r);
+}
+
 // Where a path that starts and ends outside a closed shape passes through it: where it enters,
-// in [0, 1] (`Placed::passes_through`); NONE for a segment. A path that stops short of the
-// tangent at the surface point nearest its start cannot enter (the shape is convex); a start on
-// the surface enters at once if it heads in.
-fn passes_through(o: Obstacle, start: vec2<real>, to: vec2<real>) -> real {
+// in [0, 1] (`Placed::passes_through`), with `back` the shape's distance from `start`; NONE for
+// a segment. A path that stops short of the tangent at the surface point nearest its start
+// cannot enter (the shape is convex); a start on the surface enters at once if it heads in.
+fn passes_through(o: Obstacle, start: vec2<real>, back: Distance, to: vec2<real>) -> real {
     if (is_segment(o)) { return NONE; }
-    let back = distance_to(o, start);
     let toward = -dot(to - start, back.n);
     let half = real(0.5) * MIN_THICKNESS;
     if (back.d < -half || toward < back.d || distance_to(o, to).d < real(0.0)) { return NONE; }
@@ -296,10 +303,7 @@ fn passes_through(o: Obstacle, start: vec2<real>, to: vec2<real>) -> real {
         if (toward > real(0.0)) { return real(0.0); }
         return NONE;
     }
-    let p0 = local(o, start);
-    let p1 = local(o, to);
-    if (is_circle(o)) { return ray_circle(p0, p1, vec2<real>(0.0, 0.0), o.size); }
-    return ray_rounded_box(p0, p1, o.a, real(0.0));
+    return sweep(o, local(o, start), local(o, to), real(0.0));
 }
 
 // Where the path crosses the shape itself: a segment's line, or a closed shape from side to
@@ -310,7 +314,7 @@ fn crossing(o: Obstacle, start: vec2<real>, to: vec2<real>) -> real {
         if (t > real(0.0)) { return t; }
         return NONE;
     }
-    return passes_through(o, start, to);
+    return passes_through(o, start, distance_to(o, start), to);
 }
 
 // `at`, or for a point inside a closed shape, the point just outside it by the nearest surface
@@ -323,21 +327,21 @@ fn out_by_nearest(o: Obstacle, at: vec2<real>) -> vec2<real> {
     return at;
 }
 
-// Whether a path from `start` is in contact with the shape already (`Placed::first_hit`).
-fn starts_in_contact(o: Obstacle, start: vec2<real>, r: real) -> bool {
-    return distance_to(o, start).d < r + real(0.5) * MIN_THICKNESS;
+// Whether a path whose start is `back` from the shape is in contact with it already
+// (`Placed::first_hit`).
+fn in_contact(back: Distance, r: real) -> bool {
+    return back.d < r + real(0.5) * MIN_THICKNESS;
 }
 
 fn first_hit(o: Obstacle, start: vec2<real>, to: vec2<real>, r: real) -> real {
     let p0 = local(o, start);
     let p1 = local(o, to);
-    if (starts_in_contact(o, start, r)) {
+    let back = distance_to(o, start);
+    if (in_contact(back, r)) {
         if (is_segment(o)) { return line_crossing(p0, p1, o.a, o.b); }
-        return passes_through(o, start, to);
+        return passes_through(o, start, back, to);
     }
-    if (is_circle(o)) { return ray_circle(p0, p1, vec2<real>(0.0, 0.0), o.size + r); }
-    if (is_segment(o)) { return ray_capsule(p0, p1, o.a, o.b, o.size + r); }
-    return ray_rounded_box(p0, p1, o.a, r);
+    return sweep(o, p0, p1, r);
 }
 
 fn respond(vel: vec2<real>, surface_velocity: vec2<real>, normal: vec2<real>) -> vec2<real> {
@@ -404,7 +408,7 @@ fn place(at: vec2<real>, start: vec2<real>, heading: vec2<real>, v_in: vec2<real
         let hit = start + step * best_t;
         // A path through a closed shape from a start in contact enters where the path says.
         var toward = heading;
-        if (!is_segment(o) && starts_in_contact(o, start, r)) { toward = step; }
+        if (!is_segment(o) && in_contact(distance_to(o, start), r)) { toward = step; }
         let n = hit_normal(o, hit, toward);
         let rest = step * (real(1.0) - best_t);
         let into = max(-dot(rest, n), real(0.0));
