@@ -1014,6 +1014,95 @@ fn a_push_past_a_surface_on_the_card_stays_on_its_side() {
     assert!(passes >= 28, "{passes}");
 }
 
+/// An obstacle moving at a frame's step strikes a particle in its way on the card as on the
+/// CPU (`tests/frame_step_contact.rs`): a slab r thick, a disc of radius r and a segment coming
+/// down at 10 m/s onto a particle at rest, touching it halfway through the first step, under
+/// symplectic and explicit Euler at 1/60 and 1/30 s (XPBD's substeps see each obstacle where the step
+/// began, on the card as on the CPU). The particle stays ahead of each, and where
+/// the CPU puts it: in f64 to 1e-9 m, in f32 to a millimetre. (A turning obstacle's carry is
+/// `obstacles_on_the_card_match_the_cpu`'s swept grid.)
+#[test]
+fn a_moving_obstacle_on_the_card_strikes_what_is_in_its_way() {
+    use hooke::scene::ObstacleDef;
+    let Some(gpu) = card() else { return };
+    let r = 0.01;
+    let speed = 10.0;
+    let make = move |integrator, dt: f64, shape: usize| {
+        let mut scene = bare_scene(integrator, dt);
+        scene.gravity = (0.0, 0.0);
+        // Each about (0.5, 0.4), and its half-thickness.
+        let (obstacle, half) = match shape {
+            0 => (
+                ObstacleDef::Box {
+                    center: (0.5, 0.4),
+                    half: (0.3, 0.5 * r),
+                    angle: 0.0,
+                },
+                0.5 * r,
+            ),
+            1 => (
+                ObstacleDef::Circle {
+                    center: (0.5, 0.4),
+                    radius: r,
+                },
+                r,
+            ),
+            _ => (
+                ObstacleDef::Segment {
+                    a: (0.2, 0.4),
+                    b: (0.8, 0.4),
+                    thickness: 0.0,
+                },
+                0.0,
+            ),
+        };
+        let below = 0.4 - half - r - 0.5 * speed * dt;
+        scene.particles = vec![particle(0.5, below, false)];
+        scene.obstacles = vec![obstacle];
+        scene.contact = Some(hooke::sim::ContactSettings {
+            radius: r,
+            friction: 0.5,
+            ..Default::default()
+        });
+        let mut app = app_with(scene);
+        let world = app.world_mut();
+        for mut v in world
+            .query::<&mut hooke::sim::ObstacleVelocity>()
+            .iter_mut(world)
+        {
+            v.linear = bevy::math::DVec2::new(0.0, -speed);
+        }
+        app
+    };
+    let mut runs = 0;
+    for integrator in [Integrator::SymplecticEuler, Integrator::ExplicitEuler] {
+        for dt in [1.0 / 60.0, 1.0 / 30.0] {
+            for (shape, what) in ["slab", "disc", "segment"].iter().enumerate() {
+                let steps = 4;
+                let mut cpu = make(integrator, dt, shape);
+                step(&mut cpu, steps);
+                for precision in gpu.precisions() {
+                    let mut on_card = make(integrator, dt, shape);
+                    sim::gpu::advance_on_gpu(on_card.world_mut(), &gpu, precision, steps).unwrap();
+                    let end = pos(&on_card, 0);
+                    let ahead = (0.4 - speed * dt * steps as f64) - end.y;
+                    let worst = difference(&cpu, &on_card);
+                    let name = format!("{integrator} at {dt:.4} s, the {what}, {precision:?}");
+                    println!("{name}: {worst:e} m off the CPU's, {ahead} m ahead of its centre");
+                    assert!(ahead > 0.0, "{name}: behind it at {end}");
+                    let tolerance = match precision {
+                        Precision::F32 => 1e-3,
+                        Precision::F64 => 1e-9,
+                    };
+                    assert!(worst < tolerance, "{name}: {worst} m off");
+                    runs += 1;
+                }
+            }
+        }
+    }
+    assert!(runs >= 12, "{runs}");
+}
+
 /// A particle held and dragged (`Kinematic`, its `Position` moved between ticks, as the app's
 /// grab does) while the card steps: the card takes each new position, so the cloth follows the
 /// drag as on the CPU (in f64, to 1e-9 m); with the state read back each tick and in the

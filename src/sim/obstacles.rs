@@ -10,6 +10,7 @@
 //! read the contacts back, without this crate knowing the rigid-body engine.
 
 use super::components::CreationOrder;
+use super::params::Integrator;
 use crate::solver::{Inertia, Placed, Pose, Shape};
 use bevy::math::DVec2;
 use bevy::prelude::*;
@@ -101,17 +102,32 @@ impl Obstacles {
         index
     }
 
-    /// Moves the moving obstacles by their velocities over `dt` (after each step's contact
-    /// pass, on the CPU or for the card's steps); returns whether any moved.
-    pub(crate) fn advance(&mut self, dt: f64) -> bool {
+    /// Moves the moving obstacles by their velocities over `dt`: with `first`, those that a
+    /// step of `integrator` moves at its start, so that its contact sees them where it ends
+    /// (this crate's, and an adapter's kinematic bodies); without, the others, after the
+    /// step's contact, which saw them where it began (under XPBD, and those whose bodies feel
+    /// the particles: [`crate::solver::Surroundings::leads`]). Returns whether any moved.
+    pub(crate) fn advance(&mut self, dt: f64, first: bool, integrator: Integrator) -> bool {
         let mut moved = false;
-        for p in &mut self.placed {
-            if p.pose.velocity != DVec2::ZERO || p.pose.angular_velocity != 0.0 {
-                p.advance(dt);
+        for k in 0..self.placed.len() {
+            if self.placed[k].moves() && self.moves_first(k, integrator) == first {
+                self.placed[k].advance(dt);
                 moved = true;
             }
         }
         moved
+    }
+
+    /// Whether some obstacle that a step of `integrator` moves at its start moves.
+    pub(crate) fn any_moves_first(&self, integrator: Integrator) -> bool {
+        (0..self.placed.len()).any(|k| self.placed[k].moves() && self.moves_first(k, integrator))
+    }
+
+    /// Whether a step of `integrator` moves obstacle `k` at its start: not under XPBD, whose
+    /// substeps see it where the step began, nor when its body feels the particles' contacts
+    /// (its engine moves it).
+    fn moves_first(&self, k: usize, integrator: Integrator) -> bool {
+        integrator != Integrator::Xpbd && !(self.feel && self.reactions.feels(k))
     }
 }
 

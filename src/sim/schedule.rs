@@ -216,8 +216,11 @@ impl Plugin for SimPlugin {
                         .chain()
                         .in_set(StepSystems::Advance),
                     collide.run_if(contact_enabled).in_set(StepSystems::Collide),
-                    actuate
-                        .run_if(scene_has_muscles)
+                    (
+                        move_obstacles.run_if(obstacles_move),
+                        actuate.run_if(scene_has_muscles),
+                    )
+                        .chain()
                         .in_set(StepSystems::Actuate),
                     yield_springs
                         .run_if(scene_has_plastic_springs)
@@ -461,7 +464,8 @@ fn particle_sweep(
     n.sweeps += 1;
 }
 
-/// The contact pass, then the obstacles move by their velocities.
+/// The contact pass, then the obstacles that stood where the step began (under XPBD, and
+/// those whose bodies feel the particles) move by their velocities.
 fn collide(
     mut solver: ResMut<Solver>,
     mut obstacles: ResMut<super::obstacles::Obstacles>,
@@ -489,10 +493,30 @@ fn collide(
         o.reactions
             .close_step(o.placed.len(), &mut s.state.v, &s.state.inv_mass);
     }
-    if o.advance(dt) {
+    // Those that stood where the step began move now.
+    if o.advance(dt, false, integrator) {
         obstacles.set_changed();
     }
     n.contact += 1;
+}
+
+/// The obstacles that the step moves by their velocities move to where the step ends, first:
+/// its contact sees them there, each particle's path read in its frame
+/// ([`crate::solver::contact::pass`]). (Not under XPBD, nor a body that feels the particles:
+/// those move after the contact, [`collide`].)
+fn move_obstacles(mut obstacles: ResMut<super::obstacles::Obstacles>, params: Res<SimParams>) {
+    let (dt, integrator) = (params.dt, params.integrator);
+    if obstacles
+        .bypass_change_detection()
+        .advance(dt, true, integrator)
+    {
+        obstacles.set_changed();
+    }
+}
+
+/// Run condition: an obstacle that the step moves moves.
+fn obstacles_move(obstacles: Res<super::obstacles::Obstacles>, params: Res<SimParams>) -> bool {
+    obstacles.any_moves_first(params.integrator)
 }
 
 /// Whether this tick's steps go to the graphics card (never without the `gpu` feature).

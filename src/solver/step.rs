@@ -93,6 +93,8 @@ pub struct Workspace {
     pub(crate) pre_contact: Vec<DVec2>,
     /// Each obstacle's reach for the step's solve ([`contact::reaches`]).
     pub(crate) reach: Vec<f64>,
+    /// How long each obstacle has been moving onto the particles ([`Surroundings::leads`]).
+    pub(crate) lead: Vec<f64>,
 }
 
 impl Workspace {
@@ -111,6 +113,7 @@ impl Workspace {
             outlines: Outlines::default(),
             pre_contact: Vec::new(),
             reach: Vec::new(),
+            lead: Vec::new(),
         }
     }
 
@@ -348,6 +351,12 @@ pub fn integrate(
     }
     if let Some(a) = around {
         w.reach = contact::reaches(a.obstacles, a.settings.map_or(0.0, |c| c.radius));
+        // XPBD's substeps see each obstacle where the step began (`Surroundings::leads`).
+        w.lead = if m.integrator == Integrator::Xpbd {
+            vec![]
+        } else {
+            a.leads(dt)
+        };
     }
     let contact = around.and_then(|a| {
         let (pairs, outlines) = (Some(&w.pairs), Some(&w.outlines));
@@ -356,7 +365,7 @@ pub fn integrate(
             pairs,
             outlines,
             &w.pre_contact,
-            &w.reach,
+            (&w.reach, &w.lead),
             dt,
             bare_ground,
         )

@@ -61,13 +61,12 @@ pub enum Gesture {
         from: DVec2,
         to: DVec2,
     },
-    /// A press on an obstacle: it follows the cursor (kept at `offset` from it) with the
-    /// cursor's velocity, which what rests on it feels through friction; it stops on release.
+    /// A press on an obstacle: it follows the cursor (kept at `offset` from it), moved there by
+    /// the steps at a velocity, which what it meets feels: struck ahead of it, or carried by
+    /// friction; it stops on release.
     MoveObstacle {
         obstacle: Entity,
         offset: DVec2,
-        last: DVec2,
-        velocity: DVec2,
     },
 }
 
@@ -239,8 +238,6 @@ pub fn press(
         *gesture = Gesture::MoveObstacle {
             obstacle,
             offset: center - at,
-            last: at,
-            velocity: DVec2::ZERO,
         };
         return;
     }
@@ -311,6 +308,7 @@ pub fn drag(
     scene: Option<Res<CurrentScene>>,
     time: Res<Time<Real>>,
     params: Res<SimParams>,
+    status: Res<SimStatus>,
     solver: Res<Solver>,
     entities: &Entities,
     springs: Query<&Spring>,
@@ -342,29 +340,26 @@ pub fn drag(
                 *gesture = Gesture::None;
             }
         }
-        Gesture::MoveObstacle {
-            obstacle,
-            offset,
-            last,
-            velocity,
-        } => {
+        Gesture::MoveObstacle { obstacle, offset } => {
             let Ok((mut pose, mut vel)) = moving.get_mut(*obstacle) else {
                 // Deleted or undone under the cursor.
                 *gesture = Gesture::None;
                 return;
             };
+            let stepping = held && !params.paused && *status == SimStatus::Running;
+            let frame = time.delta_secs_f64();
+            let mut v = DVec2::ZERO;
             if let Some(at) = at {
-                follow(velocity, last, at, time.delta_secs_f64());
-                let center = at + *offset;
-                if pose.center != center {
-                    pose.center = center;
+                let target = at + *offset;
+                if stepping && frame > 0.0 {
+                    // The coming frame's steps take it to the cursor at this velocity, and their
+                    // contact strikes what lies in its way. Set down at the cursor instead, it
+                    // jumped between two steps, past a strip of cloth lying on a thin shelf.
+                    v = (target - pose.center) / frame;
+                } else if pose.center != target {
+                    pose.center = target;
                 }
             }
-            let v = if params.paused || !held {
-                DVec2::ZERO
-            } else {
-                *velocity
-            };
             if vel.linear != v || vel.angular != 0.0 {
                 *vel = ObstacleVelocity {
                     linear: v,

@@ -37,6 +37,10 @@ pub struct InSolve<'a> {
     obstacles: &'a [Placed],
     /// Each obstacle's reach ([`super::pass::reaches`]).
     reach: &'a [f64],
+    /// How long each obstacle has been moving onto the particles when the iterate is held
+    /// out of it ([`Surroundings::leads`]): the step's own motion, from its start to where
+    /// the obstacle now stands at the step's end.
+    lead: &'a [f64],
     ground: Option<f64>,
     radius: f64,
     friction: f64,
@@ -67,7 +71,8 @@ impl<'a> InSolve<'a> {
     /// The contact of a step of `dt` with `around`'s surfaces, and with particle pairs through
     /// `pairs` when they are readied ([`Pairs::ready_for_step`]). `None` when there is nothing
     /// to keep out of: a scene without contact runs exactly what it ran before. `reach` holds
-    /// each obstacle's [`super::pass::reaches`] at the contact radius.
+    /// each obstacle's [`super::pass::reaches`] at the contact radius, and how long it has
+    /// been moving onto the particles ([`Surroundings::leads`]).
     ///
     /// `bare_ground`: the ground is kept out of even without contact settings (the methods
     /// whose solve the step's own clamp cannot reach: [`crate::solver::step::integrate`]).
@@ -76,7 +81,7 @@ impl<'a> InSolve<'a> {
         pairs: Option<&'a Pairs>,
         outlines: Option<&'a Outlines>,
         heading: &'a [DVec2],
-        reach: &'a [f64],
+        (reach, lead): (&'a [f64], &'a [f64]),
         dt: f64,
         bare_ground: bool,
     ) -> Option<Self> {
@@ -103,6 +108,7 @@ impl<'a> InSolve<'a> {
         Some(InSolve {
             obstacles,
             reach,
+            lead,
             ground,
             radius,
             friction: settings.friction,
@@ -180,8 +186,8 @@ impl<'a> InSolve<'a> {
                 _ => return None,
             }
         }
-        let heading = self.heading.get(i).copied().unwrap_or(*x - from);
         let (friction, dt) = (self.friction, self.dt);
+        let heading = self.heading.get(i).copied().unwrap_or((*x - from) / dt);
         let mut held = None;
         let reactions = self.reactions.filter(|_| per_metre != 0.0);
         // Where the particle was before each obstacle's push, to note that push alone.
@@ -191,7 +197,7 @@ impl<'a> InSolve<'a> {
             from,
             heading,
             self.obstacles,
-            self.reach,
+            (self.reach, self.lead),
             self.radius,
             self.ground,
             |x, touched: Touched| {

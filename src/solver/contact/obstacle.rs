@@ -383,6 +383,34 @@ impl Placed {
         self.pose.angle += self.pose.angular_velocity * dt;
     }
 
+    /// Whether the obstacle moves: a velocity or an angular velocity other than zero.
+    pub fn moves(&self) -> bool {
+        self.pose.velocity != DVec2::ZERO || self.pose.angular_velocity != 0.0
+    }
+
+    /// Where the point of the obstacle that was at `p` a time `lead` ago is now, the
+    /// obstacle having moved by its velocities since ([`Self::advance`]); `p` itself for an
+    /// obstacle that does not move or a lead of 0.
+    ///
+    /// Why: a step's contact sees a moving obstacle where the step ends, and reads a
+    /// particle's path against it from where the particle's start was on the obstacle's
+    /// frame (the contact pass's `place`). A box moving at 2 m/s moves 3.3 cm in a step of
+    /// 1/60 s: a particle lying still in its way is struck though its own path has no length.
+    pub fn carried(&self, p: DVec2, lead: f64) -> DVec2 {
+        if lead == 0.0 || !self.moves() {
+            return p;
+        }
+        let start = self.pose.center - self.pose.velocity * lead;
+        let turn = self.pose.angular_velocity * lead;
+        let arm = p - start;
+        let arm = if turn == 0.0 {
+            arm
+        } else {
+            DVec2::from_angle(turn).rotate(arm)
+        };
+        self.pose.center + arm
+    }
+
     /// What is wrong with the shape or pose, as (what, value, rule), if anything: a radius or
     /// half-extent that is not finite and positive, a thickness that is not finite and >= 0,
     /// a segment of zero length, or a non-finite pose or velocity.
@@ -845,6 +873,46 @@ mod tests {
         let hit = from + (to - from) * t;
         assert!(s.distance(hit).0.abs() < 1e-12, "{hit}");
         assert_eq!(s.first_hit(from, DVec2::new(0.3, 0.35), 0.0), None);
+    }
+
+    /// A point carried by a moving, turning obstacle keeps its place on it: its coordinates
+    /// in the obstacle's frame at the step's start are those of the carried point at its end,
+    /// for a box moving and turning over steps of several lengths; and nothing moves for a
+    /// lead of 0 or an obstacle at rest.
+    #[test]
+    fn a_carried_point_keeps_its_place_on_the_obstacle() {
+        let start = Placed {
+            shape: Shape::Box {
+                half: DVec2::new(0.2, 0.1),
+            },
+            pose: Pose {
+                center: DVec2::new(0.4, -0.3),
+                angle: 0.7,
+                velocity: DVec2::new(1.5, -0.5),
+                angular_velocity: 3.0,
+            },
+        };
+        for dt in [1e-4, 1.0 / 60.0, 0.25] {
+            let mut end = start;
+            end.advance(dt);
+            for p in [
+                DVec2::new(0.1, 0.2),
+                DVec2::new(-1.0, 0.5),
+                start.pose.center,
+            ] {
+                let (before, after) = (start.local(p), end.local(end.carried(p, dt)));
+                assert!(
+                    (before - after).length() < 1e-12,
+                    "{dt}: {before} -> {after}"
+                );
+            }
+            assert_eq!(end.carried(DVec2::ONE, 0.0), DVec2::ONE);
+        }
+        let still = Placed {
+            pose: Pose::default(),
+            ..start
+        };
+        assert_eq!(still.carried(DVec2::ONE, 0.5), DVec2::ONE);
     }
 
     /// A particle resting on a thin closed shape, struck through it within a step, is caught

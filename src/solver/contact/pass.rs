@@ -151,6 +151,35 @@ impl Surroundings<'_> {
         p
     }
 
+    /// How long each obstacle has been moving onto the particles when a step of `dt` reads
+    /// it ([`place`]): `dt` for one that moves by its velocity over the step, which the step
+    /// moved to where it ends before its contact (an obstacle of this crate, a kinematic
+    /// body); 0 for one that stands still, and for one whose body another engine moves after
+    /// the step, feeling the particles' push (a dynamic rigid body, [`Reactions::feels`]):
+    /// that one stands where the step began. (XPBD's solve reads none of these: its
+    /// substeps see each obstacle where the step began, [`crate::solver::step::integrate`].)
+    ///
+    /// Why not sweep a dynamic body too: the push it gave a stiff net, swept ahead of it
+    /// within the step as if it were a wall, came back to it in full, and past twice its mass
+    /// (k dt² > 2M, eleven times past for the `crates` scene's net at 1/60 s) that threw it
+    /// back faster than it came: its crates spun up without bound under projective dynamics,
+    /// XPBD and VBD (docs/performance-log.md, 2026-12-06).
+    ///
+    /// Empty when none has a lead: the common case, a scene whose obstacles stand still, pays
+    /// nothing for it.
+    pub(crate) fn leads(&self, dt: f64) -> Vec<f64> {
+        let felt = |k: usize| self.reactions.is_some_and(|r| r.feels(k));
+        let leads = |k: usize, o: &Placed| o.moves() && !felt(k);
+        if !self.obstacles.iter().enumerate().any(|(k, o)| leads(k, o)) {
+            return vec![];
+        }
+        self.obstacles
+            .iter()
+            .enumerate()
+            .map(|(k, o)| if leads(k, o) { dt } else { 0.0 })
+            .collect()
+    }
+
     pub(crate) fn surface(&self, dt: f64, gravity: DVec2) -> Surface {
         let s = self.settings.unwrap_or_default();
         Surface {
@@ -184,7 +213,7 @@ pub fn collide(
         around.surface(dt, gravity),
     );
     let obstacles = around.obstacles;
-    let reach = reaches(obstacles, r);
+    let (reach, lead) = (reaches(obstacles, r), around.leads(dt));
     // Once a contact has put the particle back on a surface (normal n, pushed out by depth,
     // the surface moving at surface_velocity): friction on the step's sliding, then the
     // velocity's response.
@@ -208,16 +237,16 @@ pub fn collide(
         if w == 0.0 {
             return 0;
         }
-        // Where the step began, and where the particle was going (its velocity, for a step
-        // that did not move it).
+        // Where the step began, and where the particle was going (the velocity it moved
+        // with, or its velocity, for a step that did not move it).
         let from = *x - u * dt;
-        let heading = if *x != from { *x - from } else { *v };
+        let heading = if *x != from { u } else { *v };
         place(
             x,
             from,
             heading,
             obstacles,
-            &reach,
+            (&reach, &lead),
             r,
             ground,
             |x, touched| grip(i, x, v, w, from, touched),
@@ -360,31 +389,69 @@ pub(crate) fn reaches(obstacles: &[Placed], r: f64) -> Vec<f64> {
         .collect()
 }
 
-/// Puts a particle that moved from `from` to `x` (heading `heading`) back out of the obstacles
-/// (`reach`: each one's [`reaches`]) and the ground (`ground`: its height when this pass
-/// handles it) by the radius `r`, and calls `touched(x, surface)` for each surface it was put
-/// on. A path that crosses into an obstacle stops where it first touches and slides on along
-/// the surface for the rest of its travel, so that no step, however large, carries a particle
-/// through a thin one. Returns the contacts. The contact pass and the large-step methods'
-/// solves ([`super::inside`]) both place particles with it.
+/// Puts a particle that moved from `from` to `x` (heading `heading`, a velocity: only its
+/// direction counts) back out of the obstacles and the ground (`ground`: its height when this
+/// pass handles it) by the radius `r`, and calls `touched(x, surface)` for each surface it
+/// was put on. A path that crosses into an obstacle stops where it first touches and slides
+/// on along the surface for the rest of its travel, so that no step, however large, carries a
+/// particle through a thin one. Returns the contacts. The contact pass and the large-step
+/// methods' solves ([`super::inside`]) both place particles with it.
+///
+/// `(reach, lead)`: each obstacle's [`reaches`], and how long it has been moving onto the
+/// particles ([`Surroundings::leads`]; missing: 0). A moving obstacle stands where the step
+/// ends, and reads the path in its own frame: from where the start was on it
+/// ([`Placed::carried`]), with the heading relative to its surface. A box that moves onto a
+/// particle within the step strikes it, where a test of the particle's own path, which has
+/// no length for a particle at rest, let a thin one move clean past it.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn place(
     x: &mut DVec2,
     from: DVec2,
     heading: DVec2,
     obstacles: &[Placed],
-    reach: &[f64],
+    (reach, lead): (&[f64], &[f64]),
     r: f64,
     ground: Option<f64>,
+    touched: impl FnMut(&mut DVec2, Touched),
+) -> usize {
+    let around = (obstacles, reach, r, ground);
+    // The path's length bounded by |Δx| + |Δy|, for the test of which obstacles it comes near.
+    if lead.is_empty() {
+        // Nothing moves onto the particles (`Surroundings::leads`), the common case: the path
+        // as it is, its length worked out once.
+        let travel = (*x - from).abs().element_sum();
+        return place_along(x, around, |_| (from, travel, heading), touched);
+    }
+    // Each obstacle's view of the path: from where its start was on the obstacle's frame,
+    // with the heading relative to its surface (at the path's end).
+    let end = *x;
+    let view = |k: usize| {
+        let o: &Placed = &obstacles[k];
+        let lead = lead.get(k).copied().unwrap_or(0.0);
+        let start = o.carried(from, lead);
+        let heading = if lead > 0.0 {
+            heading - o.velocity_at(end)
+        } else {
+            heading
+        };
+        (start, (end - start).abs().element_sum(), heading)
+    };
+    place_along(x, around, view, touched)
+}
+
+/// [`place`], with each obstacle `k`'s view of the path, `view(k)`: where it starts, its
+/// length bounded by |Δx| + |Δy|, and the heading.
+fn place_along(
+    x: &mut DVec2,
+    (obstacles, reach, r, ground): (&[Placed], &[f64], f64, Option<f64>),
+    view: impl Fn(usize) -> (DVec2, f64, DVec2),
     mut touched: impl FnMut(&mut DVec2, Touched),
 ) -> usize {
     let mut contacts = 0;
     // Only the obstacles the path comes near: a test of the distance to each one's centre,
-    // squared, against its reach and the path's length bounded by |Δx| + |Δy|. With a square
-    // root for the path and one for each distance, perf put 29 % of the 256² cloth's run on a
-    // disc at 1e-4 s here.
-    let travel = (*x - from).abs().element_sum();
-    let near = |k: usize, x: DVec2| {
+    // squared, against its reach and the path's length. With a square root for the path and
+    // one for each distance, perf put 29 % of the 256² cloth's run on a disc at 1e-4 s here.
+    let near = |k: usize, x: DVec2, travel: f64| {
         let within = reach[k] + travel;
         (x - obstacles[k].pose.center).length_squared() <= within * within
     };
@@ -393,19 +460,27 @@ pub(crate) fn place(
     // pass on that cloth from 1.35 s to 0.45 s in 2,000 steps; docs/performance-log.md,
     // 2026-12-06).
     let ground_near = ground.is_some_and(|g| x.y < g + r + SLOP);
-    if !ground_near && !(0..obstacles.len()).any(|k| near(k, *x)) {
+    if !ground_near && !(0..obstacles.len()).any(|k| near(k, *x, view(k).1)) {
         return 0;
     }
-    let first = obstacles
-        .iter()
-        .enumerate()
-        .filter(|&(k, _)| near(k, *x))
-        .filter_map(|(i, o)| o.first_hit(from, *x, r).map(|hit| (hit, i)))
-        .min_by(|a, b| a.0.t.total_cmp(&b.0.t));
-    if let Some((Hit { t, through }, i)) = first {
+    // The first obstacle the path touches (a loop: as an iterator chain over the views it
+    // was not inlined, and cost the contact pass 6 % of its instructions).
+    let mut first: Option<(Hit, usize, DVec2, DVec2)> = None;
+    for (k, o) in obstacles.iter().enumerate() {
+        let (from, travel, heading) = view(k);
+        if !near(k, *x, travel) {
+            continue;
+        }
+        if let Some(hit) = o.first_hit(from, *x, r)
+            && first.is_none_or(|f| hit.t < f.0.t)
+        {
+            first = Some((hit, k, from, heading));
+        }
+    }
+    if let Some((Hit { t, through }, i, start, heading)) = first {
         let o = &obstacles[i];
-        let step = *x - from;
-        let hit = from + step * t;
+        let step = *x - start;
+        let hit = start + step * t;
         // A segment's side is its path's start's, when the path starts off it: a solve's
         // iterate can land across a segment while its heading (its velocity plus a step of its
         // forces, far off at a frame's step) points away, and was put on the far side (implicit
@@ -436,10 +511,11 @@ pub(crate) fn place(
         contacts += 1;
     }
     for (k, o) in obstacles.iter().enumerate() {
-        if !near(k, *x) {
+        let (start, travel, heading) = view(k);
+        if !near(k, *x, travel) {
             continue;
         }
-        if let Some(touch) = o.touch(*x, from, heading, r) {
+        if let Some(touch) = o.touch(*x, start, heading, r) {
             *x += touch.normal * touch.depth;
             let surface_velocity = o.velocity_at(*x);
             touched(
@@ -575,7 +651,7 @@ mod tests {
                             x - step,
                             step,
                             &obstacles,
-                            reach,
+                            (reach, &[]),
                             r,
                             Some(-1.0),
                             |_, t| surfaces.push((t.obstacle, t.normal, t.depth)),

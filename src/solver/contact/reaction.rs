@@ -127,8 +127,7 @@ impl Reactions {
         on_particle: DVec2,
         approach: f64,
     ) {
-        let moves = self.inertia.get(obstacle).is_some_and(|b| !b.is_wall());
-        if on_particle == DVec2::ZERO || !moves {
+        if on_particle == DVec2::ZERO || !self.feels(obstacle) {
             return;
         }
         let note = Note {
@@ -147,6 +146,12 @@ impl Reactions {
     /// Forgets the bodies: every obstacle is a wall until [`Self::set_inertia`] says otherwise.
     pub fn clear_inertia(&mut self) {
         self.inertia.clear();
+    }
+
+    /// Whether obstacle `obstacle` stands for a body that the particles' contacts move (one
+    /// that is not a wall).
+    pub fn feels(&self, obstacle: usize) -> bool {
+        self.inertia.get(obstacle).is_some_and(|b| !b.is_wall())
     }
 
     /// The body behind obstacle `obstacle`.

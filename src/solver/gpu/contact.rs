@@ -250,8 +250,17 @@ impl ContactPass {
 
     /// Writes the obstacles' shapes and poses (as many as the pass was made with; a step of
     /// `dt` turns each by its angular velocity): the caller's poses, in f64, are the truth,
-    /// and the card moves its copy within a submit.
-    pub(super) fn place(&self, gpu: &Gpu, precision: Precision, dt: f64, obstacles: &[Placed]) {
+    /// and the card moves its copy within a submit. With `ahead` (every method but XPBD), each
+    /// is written where the coming step ends, moved on by its velocities over `dt` in f64 as
+    /// the CPU's step moves it before its contact (`sim::schedule`), and each step's `advance`
+    /// moves it to where the next one ends; XPBD's substeps see it where the step begins.
+    pub(super) fn place(
+        &self,
+        gpu: &Gpu,
+        precision: Precision,
+        (dt, ahead): (f64, bool),
+        obstacles: &[Placed],
+    ) {
         if self.count == 0 || obstacles.len() != self.count {
             return;
         }
@@ -267,6 +276,10 @@ impl ContactPass {
                 // check (`sim::gpu::unsupported`) takes the scene back to the CPU.
                 Shape::Polygon(_) => return,
             };
+            let mut o = *o;
+            if ahead {
+                o.advance(dt);
+            }
             let p = &o.pose;
             let (sin, cos) = p.angle.sin_cos();
             let (turn_sin, turn_cos) = (p.angular_velocity * dt).sin_cos();

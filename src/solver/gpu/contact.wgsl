@@ -385,17 +385,41 @@ struct Placed {
     contacts: u32,
 }
 
-fn place(at: vec2<real>, start: vec2<real>, heading: vec2<real>, v_in: vec2<real>, respond_velocity: bool) -> Placed {
+// Where the point of a moving obstacle that was at `q` a time `lead` ago is now, the
+// obstacle standing where the step ends (obstacle.rs: `Placed::carried`).
+fn carried(o: Obstacle, q: vec2<real>, lead: real) -> vec2<real> {
+    if (lead == real(0.0) || !moves(o)) { return q; }
+    let start = o.center - o.velocity * lead;
+    var arm = q - start;
+    if (o.angular_velocity != real(0.0)) { arm = rotate(arm, o.turn); }
+    return o.center + arm;
+}
+
+fn moves(o: Obstacle) -> bool {
+    return any(o.velocity != vec2<real>(0.0, 0.0)) || o.angular_velocity != real(0.0);
+}
+
+// The heading relative to a moving obstacle's surface, where the path is read in its frame.
+fn heading_on(o: Obstacle, heading: vec2<real>, at: vec2<real>, lead: real) -> vec2<real> {
+    if (lead > real(0.0) && moves(o)) { return heading - velocity_at(o, at); }
+    return heading;
+}
+
+// `lead`: how long the obstacles have been moving onto the particles (pass.rs:
+// `Surroundings::leads`): the step's dt after an explicit step, 0 within XPBD's substeps,
+// which see each obstacle where the step began. `heading` is a velocity: only its direction
+// counts.
+fn place(at: vec2<real>, start_world: vec2<real>, heading: vec2<real>, v_in: vec2<real>, respond_velocity: bool, lead: real) -> Placed {
     var x = at;
     var vel = v_in;
     let r = p.radius;
-    let travel = length(x - start);
     var contacts = 0u;
     var best_t = real(2.0);
     var best = 0u;
     for (var k = 0u; k < p.obstacles; k++) {
         let o = obstacles[k];
-        if (!near(o, x, r, travel)) { continue; }
+        let start = carried(o, start_world, lead);
+        if (!near(o, x, r, length(x - start))) { continue; }
         let t = first_hit(o, start, x, r);
         if (t >= real(0.0) && t < best_t) {
             best_t = t;
@@ -404,28 +428,30 @@ fn place(at: vec2<real>, start: vec2<real>, heading: vec2<real>, v_in: vec2<real
     }
     if (best_t <= real(1.0)) {
         let o = obstacles[best];
+        let start = carried(o, start_world, lead);
         let step = x - start;
         let hit = start + step * best_t;
         // A path through a closed shape from a start in contact enters where the path says.
-        var toward = heading;
+        var toward = heading_on(o, heading, x, lead);
         if (!is_segment(o) && in_contact(distance_to(o, start), r)) { toward = step; }
         let n = hit_normal(o, hit, toward);
         let rest = step * (real(1.0) - best_t);
         let into = max(-dot(rest, n), real(0.0));
         x = hit + rest + n * into;
         let sv = velocity_at(o, x);
-        x = hold(x, start, sv * p.dt, n, into);
+        x = hold(x, start_world, sv * p.dt, n, into);
         if (respond_velocity) { vel = respond(vel, sv, n); }
         contacts++;
     }
     for (var k = 0u; k < p.obstacles; k++) {
         let o = obstacles[k];
-        if (!near(o, x, r, travel)) { continue; }
-        let t = touch(o, x, start, heading, r);
+        let start = carried(o, start_world, lead);
+        if (!near(o, x, r, length(x - start))) { continue; }
+        let t = touch(o, x, start, heading_on(o, heading, x, lead), r);
         if (t.hit) {
             x += t.normal * t.depth;
             let sv = velocity_at(o, x);
-            x = hold(x, start, sv * p.dt, t.normal, t.depth);
+            x = hold(x, start_world, sv * p.dt, t.normal, t.depth);
             if (respond_velocity) { vel = respond(vel, sv, t.normal); }
             contacts++;
         }
@@ -434,7 +460,7 @@ fn place(at: vec2<real>, start: vec2<real>, heading: vec2<real>, v_in: vec2<real
         let depth = max(p.ground + r - x.y, real(0.0));
         x.y = max(x.y, p.ground + r);
         let up = vec2<real>(0.0, 1.0);
-        x = hold(x, start, vec2<real>(0.0, 0.0), up, depth);
+        x = hold(x, start_world, vec2<real>(0.0, 0.0), up, depth);
         if (respond_velocity) { vel = respond(vel, vec2<real>(0.0, 0.0), up); }
         contacts++;
     }
@@ -455,8 +481,8 @@ fn collide(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
     if ((p.flags & 2u) != 0u) { moved_with = v_start[i]; }
     let start = x - moved_with * p.dt;
     var heading = vel;
-    if (any(x != start)) { heading = x - start; }
-    let placed = place(x, start, heading, vel, true);
+    if (any(x != start)) { heading = moved_with; }
+    let placed = place(x, start, heading, vel, true, p.dt);
     x_end[i] = placed.x;
     v[i] = placed.vel;
     if (placed.contacts > 0u) {
@@ -477,14 +503,14 @@ fn enter(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) 
     let i = thread(id, groups);
     if (i >= p.n || inv_mass[i] == real(0.0)) { return; }
     let at = iterate[i];
-    iterate[i] = place(at, at, heading_before[i], vec2<real>(0.0, 0.0), false).x;
+    iterate[i] = place(at, at, heading_before[i], vec2<real>(0.0, 0.0), false, real(0.0)).x;
 }
 
 @compute @workgroup_size(256)
 fn hold_out(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = thread(id, groups);
     if (i >= p.n || inv_mass[i] == real(0.0)) { return; }
-    iterate[i] = place(iterate[i], substep_start[i], heading_before[i], vec2<real>(0.0, 0.0), false).x;
+    iterate[i] = place(iterate[i], substep_start[i], heading_before[i], vec2<real>(0.0, 0.0), false, real(0.0)).x;
 }
 
 // The velocity pass after a solve that kept contact itself (pass.rs: `settle`): a free particle
@@ -527,8 +553,9 @@ fn settle(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups)
     }
 }
 
-// After each step's contact: the obstacles move by their velocities (kinematic bodies), and
-// the step's contact count is kept as the last step's.
+// After each step's contact: the obstacles move by their velocities (kinematic bodies) over a
+// step (`ContactPass::place`: to where the next step ends, or under XPBD begins), and the
+// step's contact count is kept as the last step's.
 @compute @workgroup_size(64)
 fn advance(@builtin(global_invocation_id) id: vec3<u32>) {
     let k = id.x;

@@ -370,10 +370,12 @@ impl GpuStep {
     }
 
     /// Writes the obstacles' shapes and poses to the card (as many as it was made with): the
-    /// caller's poses, in f64, are the truth, and the card moves its copy within a submit.
+    /// caller's poses, where the coming step begins, in f64, are the truth, and the card
+    /// moves its copy within a submit.
     pub fn place(&mut self, obstacles: &[Placed]) {
         if let Some(c) = &self.contact {
-            c.place(&self.gpu, self.precision, self.dt, obstacles);
+            let ahead = self.xpbd.is_none();
+            c.place(&self.gpu, self.precision, (self.dt, ahead), obstacles);
         }
     }
 
