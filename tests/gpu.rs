@@ -1017,10 +1017,10 @@ fn a_push_past_a_surface_on_the_card_stays_on_its_side() {
 /// An obstacle moving at a frame's step strikes a particle in its way on the card as on the
 /// CPU (`tests/frame_step_contact.rs`): a slab r thick, a disc of radius r and a segment coming
 /// down at 10 m/s onto a particle at rest, touching it halfway through the first step, under
-/// symplectic and explicit Euler at 1/60 and 1/30 s (XPBD's substeps see each obstacle where the step
-/// began, on the card as on the CPU). The particle stays ahead of each, and where
-/// the CPU puts it: in f64 to 1e-9 m, in f32 to a millimetre. (A turning obstacle's carry is
-/// `obstacles_on_the_card_match_the_cpu`'s swept grid.)
+/// symplectic and explicit Euler and XPBD at 1/60 and 1/30 s (XPBD's substeps move each
+/// obstacle a substep at a time, on the card as on the CPU). The particle stays ahead of each,
+/// and where the CPU puts it: in f64 to 1e-9 m, in f32 to a millimetre. (A turning obstacle's
+/// carry is `obstacles_on_the_card_match_the_cpu`'s swept grid.)
 #[test]
 fn a_moving_obstacle_on_the_card_strikes_what_is_in_its_way() {
     use hooke::scene::ObstacleDef;
@@ -1075,7 +1075,12 @@ fn a_moving_obstacle_on_the_card_strikes_what_is_in_its_way() {
         app
     };
     let mut runs = 0;
-    for integrator in [Integrator::SymplecticEuler, Integrator::ExplicitEuler] {
+    let methods = [
+        Integrator::SymplecticEuler,
+        Integrator::ExplicitEuler,
+        Integrator::Xpbd,
+    ];
+    for integrator in methods {
         for dt in [1.0 / 60.0, 1.0 / 30.0] {
             for (shape, what) in ["slab", "disc", "segment"].iter().enumerate() {
                 let steps = 4;
@@ -1101,6 +1106,83 @@ fn a_moving_obstacle_on_the_card_strikes_what_is_in_its_way() {
         }
     }
     assert!(runs >= 12, "{runs}");
+}
+
+/// A moving platform carries what rests on it by friction on the card as on the CPU
+/// (`tests/contact.rs`): a particle on a box moving right at 0.5 m/s, or up and right at
+/// 0.5 m/s each way, friction μ = 1, under symplectic and explicit Euler and XPBD at 1/60 s.
+/// After half a second the particle moves with the platform and rests on it, and sits where
+/// the CPU puts it: in f64 to 1e-9 m, in f32 to 1e-4 m. XPBD's substeps move the platform a
+/// substep at a time, and friction reads a substep's slide of it: read against a step's, the
+/// particle was dragged off.
+#[test]
+fn a_moving_platform_on_the_card_carries_what_rests_on_it() {
+    use hooke::sim::{Obstacle, ObstaclePose, ObstacleVelocity};
+    use hooke::solver::Shape;
+    let Some(gpu) = card() else { return };
+    let (r, dt, steps) = (0.01, 1.0 / 60.0, 30);
+    let center = bevy::math::DVec2::new(0.5, 0.25);
+    let make = move |integrator, velocity| {
+        let mut scene = bare_scene(integrator, dt);
+        scene.gravity = (0.0, -9.8);
+        scene.particles = vec![particle(0.5, 0.25 + 0.05 + r, false)];
+        scene.contact = Some(hooke::sim::ContactSettings {
+            radius: r,
+            friction: 1.0,
+            ..Default::default()
+        });
+        let mut app = app_with(scene);
+        app.world_mut().spawn((
+            Obstacle(Shape::Box {
+                half: bevy::math::DVec2::new(0.5, 0.05),
+            }),
+            ObstaclePose { center, angle: 0.0 },
+            ObstacleVelocity {
+                linear: velocity,
+                angular: 0.0,
+            },
+        ));
+        app
+    };
+    let mut runs = 0;
+    let methods = [
+        Integrator::SymplecticEuler,
+        Integrator::ExplicitEuler,
+        Integrator::Xpbd,
+    ];
+    for integrator in methods {
+        for velocity in [
+            bevy::math::DVec2::new(0.5, 0.0),
+            bevy::math::DVec2::new(0.5, 0.5),
+        ] {
+            let mut cpu = make(integrator, velocity);
+            step(&mut cpu, steps);
+            for precision in gpu.precisions() {
+                let mut on_card = make(integrator, velocity);
+                sim::gpu::advance_on_gpu(on_card.world_mut(), &gpu, precision, steps).unwrap();
+                let worst = difference(&cpu, &on_card);
+                let name = format!("{integrator} at {velocity} m/s, {precision:?}");
+                let (v, at) = (vel(&on_card, 0), pos(&on_card, 0));
+                let top = center.y + velocity.y * steps as f64 * dt + 0.05 + r;
+                println!(
+                    "{name}: {worst:e} m off the CPU's, at {v} m/s, {} m over its top",
+                    at.y - top
+                );
+                assert!((v - velocity).length() < 1e-3, "{name}: carried at {v}");
+                assert!(
+                    (at.y - top).abs() < 1e-4,
+                    "{name}: at {at}, its top at {top}"
+                );
+                let tolerance = match precision {
+                    Precision::F32 => 1e-4,
+                    Precision::F64 => 1e-9,
+                };
+                assert!(worst < tolerance, "{name}: {worst} m off");
+                runs += 1;
+            }
+        }
+    }
+    assert!(runs >= 6, "{runs}");
 }
 
 /// A particle held and dragged (`Kinematic`, its `Position` moved between ticks, as the app's

@@ -97,15 +97,12 @@ pub fn settings(params: &SimParams, steps_per_tick: u64) -> ExplicitSettings {
 /// What follows a submit of `n` steps on the CPU's side: the obstacles moved in f64 as the
 /// step moves them, and the clock.
 fn after_run(world: &mut World, n: u64) {
-    let (dt, integrator) = {
-        let p = world.resource::<SimParams>();
-        (p.dt, p.integrator)
-    };
+    let dt = world.resource::<SimParams>().dt;
     {
         let mut o = world.resource_mut::<Obstacles>();
         for _ in 0..n {
-            o.advance(dt, true, integrator);
-            o.advance(dt, false, integrator);
+            o.advance(dt, true);
+            o.advance(dt, false);
         }
     }
     let mut clock = world.resource_mut::<SimClock>();

@@ -10,7 +10,6 @@
 //! read the contacts back, without this crate knowing the rigid-body engine.
 
 use super::components::CreationOrder;
-use super::params::Integrator;
 use crate::solver::{Inertia, Placed, Pose, Shape};
 use bevy::math::DVec2;
 use bevy::prelude::*;
@@ -103,14 +102,14 @@ impl Obstacles {
     }
 
     /// Moves the moving obstacles by their velocities over `dt`: with `first`, those that a
-    /// step of `integrator` moves at its start, so that its contact sees them where it ends
-    /// (this crate's, and an adapter's kinematic bodies); without, the others, after the
-    /// step's contact, which saw them where it began (under XPBD, and those whose bodies feel
-    /// the particles: [`crate::solver::Surroundings::leads`]). Returns whether any moved.
-    pub(crate) fn advance(&mut self, dt: f64, first: bool, integrator: Integrator) -> bool {
+    /// step moves at its start, so that its contact sees them where it ends (this crate's,
+    /// and an adapter's kinematic bodies); without, those whose bodies feel the particles,
+    /// after the step's contact, which saw them where it began (one rule for both:
+    /// [`crate::solver::contact::moves_first`]). Returns whether any moved.
+    pub(crate) fn advance(&mut self, dt: f64, first: bool) -> bool {
         let mut moved = false;
         for k in 0..self.placed.len() {
-            if self.placed[k].moves() && self.moves_first(k, integrator) == first {
+            if self.placed[k].moves() && self.moves_first(k) == first {
                 self.placed[k].advance(dt);
                 moved = true;
             }
@@ -118,16 +117,15 @@ impl Obstacles {
         moved
     }
 
-    /// Whether some obstacle that a step of `integrator` moves at its start moves.
-    pub(crate) fn any_moves_first(&self, integrator: Integrator) -> bool {
-        (0..self.placed.len()).any(|k| self.placed[k].moves() && self.moves_first(k, integrator))
+    /// Whether some obstacle that a step moves at its start moves.
+    pub(crate) fn any_moves_first(&self) -> bool {
+        (0..self.placed.len()).any(|k| self.moves_first(k))
     }
 
-    /// Whether a step of `integrator` moves obstacle `k` at its start: not under XPBD, whose
-    /// substeps see it where the step began, nor when its body feels the particles' contacts
-    /// (its engine moves it).
-    fn moves_first(&self, k: usize, integrator: Integrator) -> bool {
-        integrator != Integrator::Xpbd && !(self.feel && self.reactions.feels(k))
+    /// Whether a step moves obstacle `k` at its start.
+    fn moves_first(&self, k: usize) -> bool {
+        let reactions = self.feel.then_some(&self.reactions);
+        crate::solver::contact::moves_first(&self.placed[k], k, reactions)
     }
 }
 

@@ -464,8 +464,8 @@ fn particle_sweep(
     n.sweeps += 1;
 }
 
-/// The contact pass, then the obstacles that stood where the step began (under XPBD, and
-/// those whose bodies feel the particles) move by their velocities.
+/// The contact pass, then the obstacles that stood where the step began (those whose bodies
+/// feel the particles) move by their velocities.
 fn collide(
     mut solver: ResMut<Solver>,
     mut obstacles: ResMut<super::obstacles::Obstacles>,
@@ -494,7 +494,7 @@ fn collide(
             .close_step(o.placed.len(), &mut s.state.v, &s.state.inv_mass);
     }
     // Those that stood where the step began move now.
-    if o.advance(dt, false, integrator) {
+    if o.advance(dt, false) {
         obstacles.set_changed();
     }
     n.contact += 1;
@@ -502,21 +502,17 @@ fn collide(
 
 /// The obstacles that the step moves by their velocities move to where the step ends, first:
 /// its contact sees them there, each particle's path read in its frame
-/// ([`crate::solver::contact::pass`]). (Not under XPBD, nor a body that feels the particles:
-/// those move after the contact, [`collide`].)
+/// ([`crate::solver::contact::pass`]; XPBD's substeps each see them where the substep ends).
+/// (Not a body that feels the particles: those move after the contact, [`collide`].)
 fn move_obstacles(mut obstacles: ResMut<super::obstacles::Obstacles>, params: Res<SimParams>) {
-    let (dt, integrator) = (params.dt, params.integrator);
-    if obstacles
-        .bypass_change_detection()
-        .advance(dt, true, integrator)
-    {
+    if obstacles.bypass_change_detection().advance(params.dt, true) {
         obstacles.set_changed();
     }
 }
 
 /// Run condition: an obstacle that the step moves moves.
-fn obstacles_move(obstacles: Res<super::obstacles::Obstacles>, params: Res<SimParams>) -> bool {
-    obstacles.any_moves_first(params.integrator)
+fn obstacles_move(obstacles: Res<super::obstacles::Obstacles>) -> bool {
+    obstacles.any_moves_first()
 }
 
 /// Whether this tick's steps go to the graphics card (never without the `gpu` feature).

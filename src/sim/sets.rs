@@ -78,9 +78,9 @@ pub struct PhysicsStep;
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum StepSystems {
     /// 0. Only with moving obstacles: they move to where the step ends, so that its contact
-    ///    sees them there (not under XPBD, nor a body that feels the particles: those move
-    ///    after the contact, in `Collide`). Only with muscles: each muscle's rest length for
-    ///    the step's start time. Runs first, before the forces.
+    ///    sees them there (XPBD's substeps each where the substep ends; not a body that feels
+    ///    the particles: those move after the contact, in `Collide`). Only with muscles: each
+    ///    muscle's rest length for the step's start time. Runs first, before the forces.
     Actuate,
     /// 1. f = m g + f_ext + Σ spring forces at the start-of-step positions.
     Forces,
@@ -96,8 +96,8 @@ pub enum StepSystems {
     Advance,
     /// 6. Contact between particles when [`SimParams::contact`](super::SimParams::contact)
     ///    asks for it ([`crate::solver::contact::pairs`]), then with the obstacles, and with the
-    ///    ground when contact is set ([`crate::solver::contact`]); then the obstacles that
-    ///    stood where the step began move by their velocities.
+    ///    ground when contact is set ([`crate::solver::contact`]); then the bodies that feel
+    ///    the particles, which stood where the step began, move by their velocities.
     ///    Runs only when the scene has obstacles, contact with a ground, or particle pairs.
     Collide,
     /// 7. Only with plastic springs: each strained past its yield moves its rest length toward

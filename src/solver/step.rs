@@ -351,12 +351,7 @@ pub fn integrate(
     }
     if let Some(a) = around {
         w.reach = contact::reaches(a.obstacles, a.settings.map_or(0.0, |c| c.radius));
-        // XPBD's substeps see each obstacle where the step began (`Surroundings::leads`).
-        w.lead = if m.integrator == Integrator::Xpbd {
-            vec![]
-        } else {
-            a.leads(dt)
-        };
+        w.lead = a.leads(dt);
     }
     let contact = around.and_then(|a| {
         let (pairs, outlines) = (Some(&w.pairs), Some(&w.outlines));

@@ -16,6 +16,7 @@ pub mod pairs;
 mod pass;
 pub mod reaction;
 
+pub(crate) use pass::moves_first;
 pub(crate) use pass::reaches;
 pub use pass::{ContactSettings, Surroundings, collide, moves_with_drift, settle};
 pub use reaction::{Inertia, Reaction, Reactions};

@@ -156,8 +156,9 @@ impl Surroundings<'_> {
     /// moved to where it ends before its contact (an obstacle of this crate, a kinematic
     /// body); 0 for one that stands still, and for one whose body another engine moves after
     /// the step, feeling the particles' push (a dynamic rigid body, [`Reactions::feels`]):
-    /// that one stands where the step began. (XPBD's solve reads none of these: its
-    /// substeps see each obstacle where the step began, [`crate::solver::step::integrate`].)
+    /// that one stands where the step began ([`moves_first`]). XPBD's substeps read a
+    /// substep's share of it, each where its obstacle stands then
+    /// ([`super::inside::InSolve::at_substep`]).
     ///
     /// Why not sweep a dynamic body too: the push it gave a stiff net, swept ahead of it
     /// within the step as if it were a wall, came back to it in full, and past twice its mass
@@ -168,8 +169,7 @@ impl Surroundings<'_> {
     /// Empty when none has a lead: the common case, a scene whose obstacles stand still, pays
     /// nothing for it.
     pub(crate) fn leads(&self, dt: f64) -> Vec<f64> {
-        let felt = |k: usize| self.reactions.is_some_and(|r| r.feels(k));
-        let leads = |k: usize, o: &Placed| o.moves() && !felt(k);
+        let leads = |k: usize, o: &Placed| moves_first(o, k, self.reactions);
         if !self.obstacles.iter().enumerate().any(|(k, o)| leads(k, o)) {
             return vec![];
         }
@@ -189,6 +189,15 @@ impl Surroundings<'_> {
             rest_speed: 2.0 * gravity.length() * dt,
         }
     }
+}
+
+/// Whether a step moves obstacle `k`, `o`, to where it ends before its contact: one that
+/// moves by its velocities, unless its body feels the particles' push (`reactions`, when
+/// the obstacles stand for bodies: [`Reactions::feels`]), whose engine moves it after the
+/// step. The one rule for the core's contact ([`Surroundings::leads`]) and for whatever moves
+/// the obstacles between steps (the ECS's `Obstacles::advance`).
+pub(crate) fn moves_first(o: &Placed, k: usize, reactions: Option<&Reactions>) -> bool {
+    o.moves() && !reactions.is_some_and(|r| r.feels(k))
 }
 
 /// The contact pass over the particles `x`, `v` (after the position update), with `u` the

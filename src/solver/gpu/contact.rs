@@ -14,7 +14,8 @@ use crate::solver::contact::obstacle::{MIN_THICKNESS, Placed, Shape};
 use crate::solver::contact::pairs::Pairs;
 use glam::DVec2;
 
-/// The contact pass's kernels (`collide`, and `advance` for the obstacles), in f32.
+/// The contact pass's kernels (`collide`; `advance`, `count` and `move_obstacles` for the
+/// obstacles and the count), in f32.
 const CONTACT: &str = include_str!("contact.wgsl");
 /// The pair contact's kernels, appended to the contact pass's (whose functions they use).
 const PAIRS: &str = include_str!("pairs.wgsl");
@@ -27,7 +28,8 @@ const OBSTACLE_REALS: usize = 16;
 #[derive(Debug)]
 pub(super) struct ContactPass {
     collide: wgpu::ComputePipeline,
-    advance: wgpu::ComputePipeline,
+    /// After a step: the count kept, and the obstacles moved on by a step.
+    advance: (wgpu::ComputePipeline, wgpu::BindGroup),
     params: wgpu::Buffer,
     obstacles: wgpu::Buffer,
     /// Obstacles on the card (as many as the pass was made with).
@@ -36,7 +38,6 @@ pub(super) struct ContactPass {
     pub(super) counter: wgpu::Buffer,
     /// Bind group `g` follows the step that read `x[g]`, `v[g]`: it places `x[1 - g]`.
     groups: [wgpu::BindGroup; 2],
-    advance_group: wgpu::BindGroup,
     /// The contact between particles, when on.
     pairs: Option<super::pairs::PairPass>,
     /// Whether the ground is this pass's (contact is set and the scene has one): with no
@@ -44,14 +45,20 @@ pub(super) struct ContactPass {
     ground: bool,
     /// Under XPBD, the contact inside its substeps.
     inside: Option<InSolvePass>,
+    /// Whether an obstacle moves (the last [`Self::place`]'s): XPBD's substeps move them.
+    moving: bool,
 }
 
-/// The contact inside XPBD's substeps (`contact.wgsl`'s `enter`, `hold_out` and `settle`).
+/// The contact inside XPBD's substeps (`contact.wgsl`'s `enter`, `hold_out` and `settle`),
+/// with the obstacles moved a substep at a time (`move_obstacles`) and the count kept after
+/// the step (`count`).
 #[derive(Debug)]
 struct InSolvePass {
     enter: (wgpu::ComputePipeline, wgpu::BindGroup),
     hold_out: (wgpu::ComputePipeline, wgpu::BindGroup),
     settle: (wgpu::ComputePipeline, wgpu::BindGroup),
+    move_obstacles: (wgpu::ComputePipeline, wgpu::BindGroup),
+    count: (wgpu::ComputePipeline, wgpu::BindGroup),
 }
 
 /// The state's buffers the contact pass reads and writes.
@@ -95,10 +102,17 @@ impl ContactPass {
         let device = &gpu.device;
         let source = format!("{CONTACT}\n{PAIRS}");
         let module = shader(device, &source, "hooke contact", precision);
-        let (collide, advance) = (
-            pipeline(device, &module, "collide"),
-            pipeline(device, &module, "advance"),
-        );
+        let collide = pipeline(device, &module, "collide");
+        // A pipeline and its bind group (the entry point's own bindings, exactly).
+        let bind = |entry: &str, list: &[(u32, &wgpu::Buffer)]| {
+            let pipeline = pipeline(device, &module, entry);
+            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("hooke contact"),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &entries(list),
+            });
+            (pipeline, group)
+        };
         let params = settings_buffer(device, "contact settings", 96);
         let obstacles = empty(
             device,
@@ -121,7 +135,7 @@ impl ContactPass {
         let layout = collide.get_bind_group_layout(0);
         // After the step that read `x[from]`, `v[from]`: the start velocities, and the end
         // positions and velocities it wrote.
-        let bind = |from: usize| {
+        let bind_step = |from: usize| {
             let to = 1 - from;
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("hooke contact"),
@@ -137,12 +151,11 @@ impl ContactPass {
                 ]),
             })
         };
-        let groups = [bind(0), bind(1)];
-        let advance_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("hooke obstacles"),
-            layout: &advance.get_bind_group_layout(0),
-            entries: &entries(&[(0, &params), (5, &obstacles), (6, &counter), (19, &control)]),
-        });
+        let groups = [bind_step(0), bind_step(1)];
+        let advance = bind(
+            "advance",
+            &[(0, &params), (5, &obstacles), (6, &counter), (19, &control)],
+        );
         let pairs = pairs.map(|n| {
             // After the explicit step that read `x[0]`, the one that read `x[1]`; under XPBD,
             // after the step and inside the substeps.
@@ -161,15 +174,6 @@ impl ContactPass {
             super::pairs::PairPass::new(gpu, &module, precision, n, bound)
         });
         let inside = xpbd.map(|xp| {
-            let bind = |entry: &str, list: &[(u32, &wgpu::Buffer)]| {
-                let pipeline = pipeline(device, &module, entry);
-                let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("hooke contact in the solve"),
-                    layout: &pipeline.get_bind_group_layout(0),
-                    entries: &entries(list),
-                });
-                (pipeline, group)
-            };
             let o = &obstacles;
             InSolvePass {
                 enter: bind(
@@ -199,6 +203,8 @@ impl ContactPass {
                         (25, xp.heading),
                     ],
                 ),
+                move_obstacles: bind("move_obstacles", &[(0, &params), (5, o)]),
+                count: bind("count", &[(6, &counter), (19, &control)]),
             }
         });
         ContactPass {
@@ -209,10 +215,10 @@ impl ContactPass {
             count,
             counter,
             groups,
-            advance_group,
             pairs,
             ground: false,
             inside,
+            moving: false,
         }
     }
 
@@ -248,17 +254,19 @@ impl ContactPass {
         write_settings(&gpu.queue, &self.params, precision, header, &values);
     }
 
-    /// Writes the obstacles' shapes and poses (as many as the pass was made with; a step of
-    /// `dt` turns each by its angular velocity): the caller's poses, in f64, are the truth,
-    /// and the card moves its copy within a submit. With `ahead` (every method but XPBD), each
-    /// is written where the coming step ends, moved on by its velocities over `dt` in f64 as
-    /// the CPU's step moves it before its contact (`sim::schedule`), and each step's `advance`
-    /// moves it to where the next one ends; XPBD's substeps see it where the step begins.
+    /// Writes the obstacles' shapes and poses (as many as the pass was made with), each to
+    /// move by its velocities a `span` at a time (a step's dt, or a substep's): the caller's
+    /// poses, in f64, are the truth, and the card moves its copy within a submit. With
+    /// `ahead` (the explicit methods), each is written where the coming step ends, moved on
+    /// by its velocities over the span in f64 as the CPU's step moves it before its contact
+    /// (`sim::schedule`), and each step's `advance` moves it to where the next one ends.
+    /// XPBD's step moves it a substep at a time inside its substeps, from where the step
+    /// begins (`InSolve::at_substep` on the CPU).
     pub(super) fn place(
-        &self,
+        &mut self,
         gpu: &Gpu,
         precision: Precision,
-        (dt, ahead): (f64, bool),
+        (span, ahead): (f64, bool),
         obstacles: &[Placed],
     ) {
         if self.count == 0 || obstacles.len() != self.count {
@@ -278,11 +286,11 @@ impl ContactPass {
             };
             let mut o = *o;
             if ahead {
-                o.advance(dt);
+                o.advance(span);
             }
             let p = &o.pose;
             let (sin, cos) = p.angle.sin_cos();
-            let (turn_sin, turn_cos) = (p.angular_velocity * dt).sin_cos();
+            let (turn_sin, turn_cos) = (p.angular_velocity * span).sin_cos();
             values.extend([
                 p.center.x,
                 p.center.y,
@@ -299,9 +307,10 @@ impl ContactPass {
                 p.angular_velocity,
                 size,
                 kind,
-                0.0,
+                span,
             ]);
         }
+        self.moving = obstacles.iter().any(Placed::moves);
         gpu.queue
             .write_buffer(&self.obstacles, 0, &reals(&values, precision));
     }
@@ -328,21 +337,32 @@ impl ContactPass {
         self.record_advance(pass);
     }
 
-    /// Records the contact after XPBD's step, which kept contact inside its substeps: the
-    /// pairs (their push into the velocity), the surfaces' velocity pass, the obstacles' motion.
+    /// Records the contact after XPBD's step, which kept contact inside its substeps and moved
+    /// the obstacles there: the pairs (their push into the velocity), the surfaces' velocity
+    /// pass, the count.
     pub(super) fn record_after_solve(&self, pass: &mut wgpu::ComputePass, particles: (u32, u32)) {
+        let Some(inside) = &self.inside else { return };
         if let Some(pairs) = &self.pairs {
             pairs.record(pass, 0, true);
         }
-        if let Some(inside) = self.inside.as_ref().filter(|_| self.has_surfaces()) {
+        if self.has_surfaces() {
             dispatch(pass, &inside.settle.0, &inside.settle.1, particles);
         }
-        self.record_advance(pass);
+        dispatch(pass, &inside.count.0, &inside.count.1, (1, 1));
+    }
+
+    /// The work groups over the obstacles.
+    fn over_obstacles(&self) -> (u32, u32) {
+        ((self.count as u32).div_ceil(64).max(1), 1)
     }
 
     fn record_advance(&self, pass: &mut wgpu::ComputePass) {
-        let obstacles = ((self.count as u32).div_ceil(64).max(1), 1);
-        dispatch(pass, &self.advance, &self.advance_group, obstacles);
+        dispatch(
+            pass,
+            &self.advance.0,
+            &self.advance.1,
+            self.over_obstacles(),
+        );
     }
 
     /// Records the iterate held out of the surfaces before XPBD's first prediction, over the
@@ -353,10 +373,15 @@ impl ContactPass {
         }
     }
 
-    /// Records the contact after one of XPBD's substeps: pairs pushed apart, then the iterate
-    /// held out of the surfaces along its path from the substep's start.
+    /// Records the contact after one of XPBD's substeps: the moving obstacles moved to where
+    /// it ends, pairs pushed apart, then the iterate held out of the surfaces along its path
+    /// from the substep's start, in the obstacles' frames.
     pub(super) fn record_substep_end(&self, pass: &mut wgpu::ComputePass, particles: (u32, u32)) {
         let Some(inside) = &self.inside else { return };
+        if self.moving {
+            let (pipeline, group) = &inside.move_obstacles;
+            dispatch(pass, pipeline, group, self.over_obstacles());
+        }
         if let Some(pairs) = &self.pairs {
             pairs.record_pushes(pass, 1);
         }

@@ -39,8 +39,9 @@ struct Params {
 }
 
 // kind: 0 a circle (size: its radius), 1 a box (a: its half-extents), 2 a segment from a to b
-// (size: its thickness, at least MIN_THICKNESS). Its rotation is kept as (cos, sin), and turned
-// each step by (cos, sin) of ω dt, both from the host: Vulkan's sine and cosine take no f64.
+// (size: its thickness, at least MIN_THICKNESS). It moves by its velocities a `span` at a time:
+// a step's dt, or under XPBD a substep's. Its rotation is kept as (cos, sin), and turned each
+// span by (cos, sin) of ω span, both from the host: Vulkan's sine and cosine take no f64.
 struct Obstacle {
     center: vec2<real>,
     velocity: vec2<real>,
@@ -51,7 +52,7 @@ struct Obstacle {
     angular_velocity: real,
     size: real,
     kind: real,
-    spare: real,
+    span: real,
 }
 
 @group(0) @binding(0) var<uniform> p: Params;
@@ -386,7 +387,8 @@ struct Placed {
 }
 
 // Where the point of a moving obstacle that was at `q` a time `lead` ago is now, the
-// obstacle standing where the step ends (obstacle.rs: `Placed::carried`).
+// obstacle standing where the path ends (obstacle.rs: `Placed::carried`). `lead` is 0 or its
+// span, the turn's.
 fn carried(o: Obstacle, q: vec2<real>, lead: real) -> vec2<real> {
     if (lead == real(0.0) || !moves(o)) { return q; }
     let start = o.center - o.velocity * lead;
@@ -405,11 +407,12 @@ fn heading_on(o: Obstacle, heading: vec2<real>, at: vec2<real>, lead: real) -> v
     return heading;
 }
 
-// `lead`: how long the obstacles have been moving onto the particles (pass.rs:
-// `Surroundings::leads`): the step's dt after an explicit step, 0 within XPBD's substeps,
-// which see each obstacle where the step began. `heading` is a velocity: only its direction
-// counts.
-fn place(at: vec2<real>, start_world: vec2<real>, heading: vec2<real>, v_in: vec2<real>, respond_velocity: bool, lead: real) -> Placed {
+// With `leads`, each moving obstacle has moved onto the particles over the path (pass.rs:
+// `Surroundings::leads`), by its span: a step's after an explicit step, a substep's within
+// XPBD's; without, it stands where the path began (XPBD's `enter`, a path of no length). The
+// surfaces' slide that friction measures is a span's. `heading` is a velocity: only its
+// direction counts.
+fn place(at: vec2<real>, start_world: vec2<real>, heading: vec2<real>, v_in: vec2<real>, respond_velocity: bool, leads: bool) -> Placed {
     var x = at;
     var vel = v_in;
     let r = p.radius;
@@ -418,6 +421,7 @@ fn place(at: vec2<real>, start_world: vec2<real>, heading: vec2<real>, v_in: vec
     var best = 0u;
     for (var k = 0u; k < p.obstacles; k++) {
         let o = obstacles[k];
+        let lead = select(real(0.0), o.span, leads);
         let start = carried(o, start_world, lead);
         if (!near(o, x, r, length(x - start))) { continue; }
         let t = first_hit(o, start, x, r);
@@ -428,6 +432,7 @@ fn place(at: vec2<real>, start_world: vec2<real>, heading: vec2<real>, v_in: vec
     }
     if (best_t <= real(1.0)) {
         let o = obstacles[best];
+        let lead = select(real(0.0), o.span, leads);
         let start = carried(o, start_world, lead);
         let step = x - start;
         let hit = start + step * best_t;
@@ -439,19 +444,20 @@ fn place(at: vec2<real>, start_world: vec2<real>, heading: vec2<real>, v_in: vec
         let into = max(-dot(rest, n), real(0.0));
         x = hit + rest + n * into;
         let sv = velocity_at(o, x);
-        x = hold(x, start_world, sv * p.dt, n, into);
+        x = hold(x, start_world, sv * o.span, n, into);
         if (respond_velocity) { vel = respond(vel, sv, n); }
         contacts++;
     }
     for (var k = 0u; k < p.obstacles; k++) {
         let o = obstacles[k];
+        let lead = select(real(0.0), o.span, leads);
         let start = carried(o, start_world, lead);
         if (!near(o, x, r, length(x - start))) { continue; }
         let t = touch(o, x, start, heading_on(o, heading, x, lead), r);
         if (t.hit) {
             x += t.normal * t.depth;
             let sv = velocity_at(o, x);
-            x = hold(x, start_world, sv * p.dt, t.normal, t.depth);
+            x = hold(x, start_world, sv * o.span, t.normal, t.depth);
             if (respond_velocity) { vel = respond(vel, sv, t.normal); }
             contacts++;
         }
@@ -482,7 +488,7 @@ fn collide(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups
     let start = x - moved_with * p.dt;
     var heading = vel;
     if (any(x != start)) { heading = moved_with; }
-    let placed = place(x, start, heading, vel, true, p.dt);
+    let placed = place(x, start, heading, vel, true, true);
     x_end[i] = placed.x;
     v[i] = placed.vel;
     if (placed.contacts > 0u) {
@@ -503,14 +509,14 @@ fn enter(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) 
     let i = thread(id, groups);
     if (i >= p.n || inv_mass[i] == real(0.0)) { return; }
     let at = iterate[i];
-    iterate[i] = place(at, at, heading_before[i], vec2<real>(0.0, 0.0), false, real(0.0)).x;
+    iterate[i] = place(at, at, heading_before[i], vec2<real>(0.0, 0.0), false, false).x;
 }
 
 @compute @workgroup_size(256)
 fn hold_out(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = thread(id, groups);
     if (i >= p.n || inv_mass[i] == real(0.0)) { return; }
-    iterate[i] = place(iterate[i], substep_start[i], heading_before[i], vec2<real>(0.0, 0.0), false, real(0.0)).x;
+    iterate[i] = place(iterate[i], substep_start[i], heading_before[i], vec2<real>(0.0, 0.0), false, true).x;
 }
 
 // The velocity pass after a solve that kept contact itself (pass.rs: `settle`): a free particle
@@ -553,24 +559,39 @@ fn settle(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups)
     }
 }
 
-// After each step's contact: the obstacles move by their velocities (kinematic bodies) over a
-// step (`ContactPass::place`: to where the next step ends, or under XPBD begins), and the
-// step's contact count is kept as the last step's.
+// After each step's contact: the step's contact count is kept as the last step's, and
+// (`advance`) the obstacles move by their velocities (kinematic bodies) over a span
+// (`ContactPass::place`: to where the next step ends). Under XPBD they move a substep at a
+// time inside it (`move_obstacles`), and its step ends with the count alone (`count`).
+fn keep_count() {
+    // With the pairs touching (each pair once): the first iteration's, or the velocity
+    // pass's, whichever saw more.
+    let pairs = max(atomicLoad(&control[FIRST]), atomicLoad(&control[TOUCHING])) / 2u;
+    atomicStore(&counter[1], atomicLoad(&counter[0]));
+    atomicStore(&counter[2], pairs);
+    atomicStore(&counter[0], 0u);
+}
+
+fn move_obstacle(k: u32) {
+    obstacles[k].center += obstacles[k].velocity * obstacles[k].span;
+    if (obstacles[k].angular_velocity != real(0.0)) {
+        obstacles[k].rotation = rotate(obstacles[k].rotation, obstacles[k].turn);
+    }
+}
+
 @compute @workgroup_size(64)
 fn advance(@builtin(global_invocation_id) id: vec3<u32>) {
     let k = id.x;
-    if (k == 0u) {
-        // With the pairs touching (each pair once): the first iteration's, or the velocity
-        // pass's, whichever saw more.
-        let pairs = max(atomicLoad(&control[FIRST]), atomicLoad(&control[TOUCHING])) / 2u;
-        atomicStore(&counter[1], atomicLoad(&counter[0]));
-        atomicStore(&counter[2], pairs);
-        atomicStore(&counter[0], 0u);
-    }
-    if (k < p.obstacles) {
-        obstacles[k].center += obstacles[k].velocity * p.dt;
-        if (obstacles[k].angular_velocity != real(0.0)) {
-            obstacles[k].rotation = rotate(obstacles[k].rotation, obstacles[k].turn);
-        }
-    }
+    if (k == 0u) { keep_count(); }
+    if (k < p.obstacles) { move_obstacle(k); }
+}
+
+@compute @workgroup_size(64)
+fn count(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x == 0u) { keep_count(); }
+}
+
+@compute @workgroup_size(64)
+fn move_obstacles(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x < p.obstacles) { move_obstacle(id.x); }
 }

@@ -371,11 +371,14 @@ impl GpuStep {
 
     /// Writes the obstacles' shapes and poses to the card (as many as it was made with): the
     /// caller's poses, where the coming step begins, in f64, are the truth, and the card
-    /// moves its copy within a submit.
+    /// moves its copy within a submit (a step at a time, or under XPBD a substep at a time).
     pub fn place(&mut self, obstacles: &[Placed]) {
-        if let Some(c) = &self.contact {
-            let ahead = self.xpbd.is_none();
-            c.place(&self.gpu, self.precision, (self.dt, ahead), obstacles);
+        if let Some(c) = &mut self.contact {
+            let moves = match &self.xpbd {
+                Some(x) => (x.substep(self.dt), false),
+                None => (self.dt, true),
+            };
+            c.place(&self.gpu, self.precision, moves, obstacles);
         }
     }
 

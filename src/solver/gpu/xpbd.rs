@@ -186,7 +186,7 @@ impl XpbdPass {
         (external, dashpots): (bool, bool),
         decay: f64,
     ) {
-        let hs = settings.dt / f64::from(self.substeps);
+        let hs = self.substep(settings.dt);
         // With contact set, the ground is the contact pass's.
         let floor = settings.ground.filter(|_| settings.contact.is_none());
         let flags =
@@ -208,6 +208,11 @@ impl XpbdPass {
             [n, across, flags, 0],
             &values,
         );
+    }
+
+    /// A substep of a step of `dt`.
+    pub(super) fn substep(&self, dt: f64) -> f64 {
+        dt / f64::from(self.substeps)
     }
 
     /// The buffers the contact inside the substeps reads and writes.

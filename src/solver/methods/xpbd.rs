@@ -23,7 +23,7 @@
 //! thread. (Jacobi with averaging would need no colouring, but it converges more slowly, by a
 //! factor that grows with the number of constraints on a particle.)
 
-use crate::solver::contact::inside::InSolve;
+use crate::solver::contact::inside::{InSolve, SubstepPoses};
 use crate::solver::method::Iterations;
 use crate::solver::state::State;
 use crate::solver::threads::Threads;
@@ -92,6 +92,8 @@ pub struct Xpbd {
     /// Positions during the step, and at the start of the substep.
     x: Vec<DVec2>,
     prev: Vec<DVec2>,
+    /// Where the moving obstacles stand at each substep (empty when none moves).
+    stages: SubstepPoses,
     /// The last substep's size, for the constraint error (0 before the first step).
     last_hs: f64,
     /// Sweeps so far.
@@ -679,6 +681,11 @@ pub fn step(
     // (the pass is short: only the particles with listed neighbours), then each member's
     // particles held out of the obstacles and the ground, with friction on their slide.
     let mut scratch = vec![DVec2::ZERO; contact.map_or(0, |c| c.pair_scratch())];
+    // Each substep sees the moving obstacles where it ends (`InSolve::at_substep`).
+    xp.stages.ready(contact, substeps as usize);
+    let stages = &xp.stages;
+    let seen_at =
+        |stage: u32| contact.map(|c| c.at_substep(stages, stage as usize, substeps as usize));
     let scratch_len = scratch.len();
     let scratch = Shared::new(&mut scratch);
     // The pool's threads run the substeps together as one team (a fork and a join per colour
@@ -730,7 +737,7 @@ pub fn step(
                 )
             };
             let (f, w) = (&f[mine.clone()], &w[mine.clone()]);
-            if let Some(c) = contact.filter(|_| substep == 0) {
+            if let Some(c) = seen_at(0).filter(|_| substep == 0) {
                 // A particle that starts the step inside a surface is put out of it before the
                 // first prediction, as the ground's clamp does: pushed out after it, the push
                 // would become velocity (a point resting on a thin segment hopped off it).
@@ -810,7 +817,7 @@ pub fn step(
             if team.index() == 0 {
                 swept.fetch_add(sweep as u64, std::sync::atomic::Ordering::Relaxed);
             }
-            if let Some(c) = contact {
+            if let Some(c) = seen_at(substep + 1) {
                 if c.has_pairs() {
                     // One member: the one whose share of a single item is not empty.
                     if !team.share(0..1).is_empty() {
