@@ -22,6 +22,7 @@ pub const BUILTIN: &[(&str, &str)] = &[
     ("balloon", include_str!("../../assets/scenes/balloon.ron")),
     ("walker", include_str!("../../assets/scenes/walker.ron")),
     ("wire", include_str!("../../assets/scenes/wire.ron")),
+    ("paddle", include_str!("../../assets/scenes/paddle.ron")),
     // Rigid bodies: a build without the `avian` feature refuses it, and says why.
     ("crates", include_str!("../../assets/scenes/crates.ron")),
 ];

@@ -143,8 +143,8 @@ fn is_false(v: &bool) -> bool {
     !*v
 }
 
-/// An obstacle as written in a scene: a shape where it stands (it does not move unless a
-/// system of the app's user moves it).
+/// An obstacle as written in a scene: a shape where it stands, or ([`ObstacleDef::Moving`])
+/// where it starts and how it moves.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub enum ObstacleDef {
@@ -185,15 +185,47 @@ pub enum ObstacleDef {
         #[serde(default)]
         angle: f64,
     },
+    /// One of the shapes above, moving at a constant velocity and spin, as a kinematic body
+    /// does: nothing pushes it, it strikes what lies in its way, and it carries what rests on
+    /// it by friction (a conveyor, a paddle, a press).
+    Moving {
+        /// The shape where it starts: a `Circle`, `Box`, `Segment` or `Polygon`.
+        shape: std::boxed::Box<ObstacleDef>,
+        /// Its centre's velocity (x, y), m/s; default 0.
+        #[serde(default)]
+        velocity: (f64, f64),
+        /// Its angular velocity about its centre (a segment's midpoint), rad/s,
+        /// counter-clockwise; default 0.
+        #[serde(default)]
+        spin: f64,
+    },
 }
 
 impl ObstacleDef {
-    /// The shape in its own frame and where it stands: a segment's frame is centred on its
-    /// midpoint. An error says what is wrong with a polygon's corners.
+    /// The shape in its own frame, where it stands and how it moves: a segment's frame is
+    /// centred on its midpoint. An error says what is wrong with a polygon's corners, or with
+    /// a moving obstacle's shape.
     pub fn placed(&self) -> Result<crate::solver::Placed, String> {
         use crate::solver::{Placed, Polygon, Shape};
         use glam::DVec2;
         let (shape, center, angle) = match *self {
+            ObstacleDef::Moving {
+                ref shape,
+                velocity,
+                spin,
+            } => {
+                if let ObstacleDef::Moving { .. } = **shape {
+                    return Err(
+                        "shape: a moving obstacle's shape is a Circle, Box, Segment or Polygon, \
+                         not another Moving"
+                            .into(),
+                    );
+                }
+                let mut placed = shape.placed()?;
+                placed.pose.velocity = DVec2::from(velocity);
+                placed.pose.angular_velocity = spin;
+                return Ok(placed);
+            }
             ObstacleDef::Circle { center, radius } => {
                 (Shape::Circle { radius }, DVec2::from(center), 0.0)
             }
@@ -232,8 +264,22 @@ impl ObstacleDef {
     }
 
     /// The obstacle as written for a placed shape (the inverse of [`Self::placed`], with a
-    /// segment's ends in the world).
+    /// segment's ends in the world): [`ObstacleDef::Moving`] when it moves.
     pub fn from_placed(p: &crate::solver::Placed) -> Self {
+        let shape = Self::shape_of(p);
+        if p.moves() {
+            let v = p.pose.velocity;
+            return ObstacleDef::Moving {
+                shape: std::boxed::Box::new(shape),
+                velocity: (v.x, v.y),
+                spin: p.pose.angular_velocity,
+            };
+        }
+        shape
+    }
+
+    /// The shape as written where `p` stands, whether or not it moves.
+    fn shape_of(p: &crate::solver::Placed) -> Self {
         use crate::solver::Shape;
         let c = p.pose.center;
         match p.shape {

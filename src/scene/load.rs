@@ -221,24 +221,35 @@ pub fn replace_obstacles(world: &mut World, obstacles: &[super::format::Obstacle
     despawn_all::<With<Obstacle>>(world);
     // Validated before: a polygon that does not make one is not in a loaded scene.
     for placed in obstacles.iter().filter_map(|o| o.placed().ok()) {
+        let pose = placed.pose;
         world.spawn((
             Obstacle(placed.shape),
             ObstaclePose {
-                center: placed.pose.center,
-                angle: placed.pose.angle,
+                center: pose.center,
+                angle: pose.angle,
+            },
+            ObstacleVelocity {
+                linear: pose.velocity,
+                angular: pose.angular_velocity,
             },
         ));
     }
 }
 
-/// The world's obstacles at their current poses, in the order they were made, as a scene writes
-/// them.
+/// The world's obstacles at their current poses and velocities, in the order they were made, as
+/// a scene writes them.
 pub fn obstacle_defs(world: &mut World) -> Vec<super::format::ObstacleDef> {
     let mut all: Vec<((CreationOrder, Entity), crate::solver::Placed)> = world
-        .query::<(Entity, &CreationOrder, &Obstacle, &ObstaclePose)>()
+        .query::<(
+            Entity,
+            &CreationOrder,
+            &Obstacle,
+            &ObstaclePose,
+            &ObstacleVelocity,
+        )>()
         .iter(world)
-        .map(|(e, order, o, pose)| {
-            let placed = crate::solver::Placed::at(o.0, pose.center, pose.angle);
+        .map(|(e, order, o, pose, v)| {
+            let placed = crate::sim::obstacles::placed(o, pose, v);
             ((*order, e), placed)
         })
         .collect();

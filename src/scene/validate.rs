@@ -67,6 +67,13 @@ pub fn validate(scene: &Scene) -> Result<(), Vec<String>> {
             } else {
                 String::new()
             };
+            // As the file names them: a moving obstacle's motion beside its shape.
+            let what = match (o, what) {
+                (ObstacleDef::Moving { .. }, "velocity.x" | "velocity.y") => what.to_string(),
+                (ObstacleDef::Moving { .. }, "angular velocity") => "spin".to_string(),
+                (ObstacleDef::Moving { .. }, _) => format!("shape.{what}"),
+                _ => what.to_string(),
+            };
             p.push(format!("obstacles[{i}]: {what}: {rule}{got}"));
         }
     }
@@ -361,6 +368,13 @@ fn check_bodies(p: &mut Problems, bodies: &[super::format::BodyDef]) {
         return;
     }
     for (i, b) in bodies.iter().enumerate() {
+        if let ObstacleDef::Moving { .. } = b.shape {
+            p.push(format!(
+                "bodies[{i}].shape: a body moves by its own `velocity` and `spin`: its shape is \
+                 a Circle, Box, Segment or Polygon, not Moving"
+            ));
+            continue;
+        }
         match b.shape.placed() {
             Ok(placed) => {
                 if let Some((what, v, rule)) = placed.problem() {

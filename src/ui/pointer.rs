@@ -63,10 +63,12 @@ pub enum Gesture {
     },
     /// A press on an obstacle: it follows the cursor (kept at `offset` from it), moved there by
     /// the steps at a velocity, which what it meets feels: struck ahead of it, or carried by
-    /// friction; it stops on release.
+    /// friction. It keeps its own spin while held, and on release its own motion comes back
+    /// (`own`, read when the drag begins; none: it stops).
     MoveObstacle {
         obstacle: Entity,
         offset: DVec2,
+        own: Option<ObstacleVelocity>,
     },
 }
 
@@ -238,6 +240,7 @@ pub fn press(
         *gesture = Gesture::MoveObstacle {
             obstacle,
             offset: center - at,
+            own: None,
         };
         return;
     }
@@ -340,12 +343,17 @@ pub fn drag(
                 *gesture = Gesture::None;
             }
         }
-        Gesture::MoveObstacle { obstacle, offset } => {
+        Gesture::MoveObstacle {
+            obstacle,
+            offset,
+            own,
+        } => {
             let Ok((mut pose, mut vel)) = moving.get_mut(*obstacle) else {
                 // Deleted or undone under the cursor.
                 *gesture = Gesture::None;
                 return;
             };
+            let own = *own.get_or_insert(*vel);
             let stepping = held && !params.paused && *status == SimStatus::Running;
             let frame = time.delta_secs_f64();
             let mut v = DVec2::ZERO;
@@ -360,11 +368,16 @@ pub fn drag(
                     pose.center = target;
                 }
             }
-            if vel.linear != v || vel.angular != 0.0 {
-                *vel = ObstacleVelocity {
+            let now = if held {
+                ObstacleVelocity {
                     linear: v,
-                    angular: 0.0,
-                };
+                    angular: own.angular,
+                }
+            } else {
+                own
+            };
+            if *vel != now {
+                *vel = now;
             }
             if !held {
                 *gesture = Gesture::None;
