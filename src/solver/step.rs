@@ -94,7 +94,7 @@ pub struct Workspace {
     /// Each obstacle's reach for the step's solve ([`contact::reaches`]).
     pub(crate) reach: Vec<f64>,
     /// How long each obstacle has been moving onto the particles ([`Surroundings::leads`]).
-    pub(crate) lead: Vec<f64>,
+    pub(crate) lead: Vec<super::contact::obstacle::Lead>,
 }
 
 impl Workspace {

@@ -22,7 +22,7 @@
 //! spreads the support through the body. Restitution stays in the velocity pass after the
 //! step, which still runs and finds little left to do.
 
-use super::obstacle::Placed;
+use super::obstacle::{Lead, Placed};
 use super::outline::Outlines;
 use super::pairs::Pairs;
 use super::pass::{Surroundings, Touched, hold, place};
@@ -40,7 +40,7 @@ pub struct InSolve<'a> {
     /// How long each obstacle has been moving onto the particles when the iterate is held
     /// out of it ([`Surroundings::leads`]): the step's own motion, from its start to where
     /// the obstacle now stands at the step's end.
-    lead: &'a [f64],
+    lead: &'a [Lead],
     ground: Option<f64>,
     radius: f64,
     friction: f64,
@@ -67,7 +67,7 @@ pub(crate) struct SubstepPoses {
     /// The obstacles at the step's start, then where each substep ends: `substeps + 1` rows.
     poses: Vec<Placed>,
     /// How long each obstacle has moved onto the particles within one substep.
-    lead: Vec<f64>,
+    lead: Vec<Lead>,
 }
 
 impl SubstepPoses {
@@ -77,13 +77,13 @@ impl SubstepPoses {
     pub(crate) fn ready(&mut self, contact: Option<&InSolve>, substeps: usize) {
         self.poses.clear();
         self.lead.clear();
-        let Some(c) = contact.filter(|c| c.lead.iter().any(|&l| l > 0.0)) else {
+        let Some(c) = contact.filter(|c| c.lead.iter().any(|l| l.time > 0.0)) else {
             return;
         };
         let substeps = substeps.max(1);
-        let lead = |k: usize| c.lead.get(k).copied().unwrap_or(0.0);
-        self.lead
-            .extend((0..c.obstacles.len()).map(|k| lead(k) / substeps as f64));
+        let lead = |k: usize| c.lead.get(k).map_or(0.0, |l| l.time);
+        let share = |(k, o): (usize, &Placed)| o.lead(lead(k) / substeps as f64);
+        self.lead.extend(c.obstacles.iter().enumerate().map(share));
         for stage in 0..=substeps {
             // The share of the step still to come at this stage.
             let remaining = (substeps - stage) as f64 / substeps as f64;
@@ -121,7 +121,7 @@ impl<'a> InSolve<'a> {
         pairs: Option<&'a Pairs>,
         outlines: Option<&'a Outlines>,
         heading: &'a [DVec2],
-        (reach, lead): (&'a [f64], &'a [f64]),
+        (reach, lead): (&'a [f64], &'a [Lead]),
         dt: f64,
         bare_ground: bool,
     ) -> Option<Self> {
@@ -179,7 +179,7 @@ impl<'a> InSolve<'a> {
     ) -> InSolve<'b> {
         let span = self.dt / substeps.max(1) as f64;
         let k = self.obstacles.len();
-        let (obstacles, lead): (&[Placed], &[f64]) = if poses.poses.is_empty() {
+        let (obstacles, lead): (&[Placed], &[Lead]) = if poses.poses.is_empty() {
             (self.obstacles, self.lead)
         } else if stage == 0 {
             (&poses.poses[..k], &[])
@@ -604,7 +604,8 @@ mod tests {
             expected.advance(hs * stage as f64);
             assert!(close(&seen.obstacles[1], &expected), "stage {stage}");
             let want: &[f64] = if stage == 0 { &[] } else { &[0.0, hs] };
-            assert_eq!(seen.lead, want, "stage {stage}");
+            let times: Vec<f64> = seen.lead.iter().map(|l| l.time).collect();
+            assert_eq!(times, want, "stage {stage}");
             assert_eq!(seen.dt, hs);
         }
         assert_eq!(
@@ -622,9 +623,7 @@ mod tests {
         poses.ready(Some(&contact), substeps);
         assert!(poses.poses.is_empty());
         let seen = contact.at_substep(&poses, 3, substeps);
-        assert_eq!(
-            (seen.obstacles, seen.lead, seen.dt),
-            (&calm[..], &[][..], hs)
-        );
+        assert!(seen.lead.is_empty());
+        assert_eq!((seen.obstacles, seen.dt), (&calm[..], hs));
     }
 }

@@ -177,6 +177,21 @@ pub struct Touch {
     pub normal: DVec2,
 }
 
+/// A direction in the frame of an obstacle turned by `rotation` ([`Placed::rotation`]), in the
+/// world.
+fn world_direction(rotation: Option<DVec2>, d: DVec2) -> DVec2 {
+    rotation.map_or(d, |r| r.rotate(d))
+}
+
+/// How long a moving obstacle has been moving onto the particles when a path is read against
+/// it ([`super::Surroundings::leads`], [`Placed::carried_by`]), and its turn over that time as
+/// (cos, sin) (`None`: it does not turn).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct Lead {
+    pub time: f64,
+    pub turn: Option<DVec2>,
+}
+
 /// The least thickness a segment collides with, m. A zero-thickness segment is a line, and a
 /// point resting on it sits on it to round-off, on one side or the other of it by 1e-17 m:
 /// which side it is on would be a coin toss. A millionth of a metre of thickness, invisible at
@@ -217,25 +232,21 @@ impl Placed {
         }
     }
 
-    /// The point `p` (world) in the obstacle's frame.
-    fn local(&self, p: DVec2) -> DVec2 {
-        let q = p - self.pose.center;
-        // Unrotated (most obstacles) or round: no sine and cosine, which were a quarter of the
-        // 256² cloth's step on a disc, asked for every particle and every pair iteration.
-        if self.unturned() {
-            q
-        } else {
-            DVec2::from_angle(-self.pose.angle).rotate(q)
-        }
+    /// The obstacle's rotation, (cos, sin) of its angle; `None` when it is unrotated (most
+    /// obstacles) or round, which need no sine and cosine (they were a quarter of the 256²
+    /// cloth's step on a disc, asked for every particle and every pair iteration). A query
+    /// works it out once for all its points and directions: one for each took 27 % of the
+    /// instructions of the `paddle` scene (docs/performance-log.md, 2026-12-07).
+    fn rotation(&self) -> Option<DVec2> {
+        (!self.unturned()).then(|| DVec2::from_angle(self.pose.angle))
     }
 
-    /// A direction in the obstacle's frame, in the world.
-    fn world_direction(&self, d: DVec2) -> DVec2 {
-        if self.unturned() {
-            d
-        } else {
-            DVec2::from_angle(self.pose.angle).rotate(d)
-        }
+    /// The point `p` (world) in the frame of the obstacle turned by `rotation`
+    /// ([`Self::rotation`]).
+    fn local(&self, rotation: Option<DVec2>, p: DVec2) -> DVec2 {
+        let q = p - self.pose.center;
+        // The inverse rotation: (cos, −sin), which is (cos, sin) of −angle to the bit.
+        rotation.map_or(q, |r| DVec2::new(r.x, -r.y).rotate(q))
     }
 
     /// The radius of a circle about its centre that holds it: a particle farther than this
@@ -257,7 +268,8 @@ impl Placed {
     /// The signed distance from `p` to the shape's surface (negative inside) and the outward
     /// normal at the nearest surface point.
     pub fn distance(&self, p: DVec2) -> (f64, DVec2) {
-        let q = self.local(p);
+        let rotation = self.rotation();
+        let q = self.local(rotation, p);
         let (d, n) = match self.shape.for_contact() {
             Shape::Circle { radius } => {
                 let l = q.length();
@@ -292,7 +304,7 @@ impl Placed {
             }
             Shape::Polygon(p) => p.distance(q),
         };
-        (d, self.world_direction(n))
+        (d, world_direction(rotation, n))
     }
 
     /// The contact of a particle of radius `r` at `p`, if it is within `r` of the surface.
@@ -346,7 +358,9 @@ impl Placed {
     pub fn crossing(&self, from: DVec2, to: DVec2) -> Option<f64> {
         match self.shape.for_contact() {
             Shape::Segment { a, b, .. } => {
-                line_crossing(self.local(from), self.local(to), a, b).filter(|&t| t > 0.0)
+                let rotation = self.rotation();
+                let (from, to) = (self.local(rotation, from), self.local(rotation, to));
+                line_crossing(from, to, a, b).filter(|&t| t > 0.0)
             }
             _ => self.passes_through(from, self.distance(from), to),
         }
@@ -397,18 +411,29 @@ impl Placed {
     /// frame (the contact pass's `place`). A box moving at 2 m/s moves 3.3 cm in a step of
     /// 1/60 s: a particle lying still in its way is struck though its own path has no length.
     pub fn carried(&self, p: DVec2, lead: f64) -> DVec2 {
-        if lead == 0.0 || !self.moves() {
+        self.carried_by(p, self.lead(lead))
+    }
+
+    /// [`Self::carried`] with the lead's turn worked out ([`Self::lead`]): a contact pass
+    /// carries every particle's start by the same lead, and a sine and cosine for each were
+    /// a tenth of the `paddle` scene's instructions (docs/performance-log.md, 2026-12-07).
+    pub(crate) fn carried_by(&self, p: DVec2, lead: Lead) -> DVec2 {
+        if lead.time == 0.0 || !self.moves() {
             return p;
         }
-        let start = self.pose.center - self.pose.velocity * lead;
-        let turn = self.pose.angular_velocity * lead;
+        let start = self.pose.center - self.pose.velocity * lead.time;
         let arm = p - start;
-        let arm = if turn == 0.0 {
-            arm
-        } else {
-            DVec2::from_angle(turn).rotate(arm)
-        };
+        let arm = lead.turn.map_or(arm, |turn| turn.rotate(arm));
         self.pose.center + arm
+    }
+
+    /// A lead of `time` for this obstacle: its turn over that time worked out.
+    pub(crate) fn lead(&self, time: f64) -> Lead {
+        let turn = self.pose.angular_velocity * time;
+        Lead {
+            time,
+            turn: (turn != 0.0).then(|| DVec2::from_angle(turn)),
+        }
     }
 
     /// What is wrong with the shape or pose, as (what, value, rule), if anything: a radius or
@@ -456,7 +481,8 @@ impl Placed {
     /// keeps them out of the bodies' outline edges ([`super::outline`]); a particle's own
     /// test ([`Self::touch`]) keeps only the particles out.
     pub(crate) fn corners(&self, out: &mut Vec<(DVec2, f64)>) {
-        let at = |q: DVec2| self.pose.center + self.world_direction(q);
+        let rotation = self.rotation();
+        let at = |q: DVec2| self.pose.center + world_direction(rotation, q);
         match self.shape.for_contact() {
             Shape::Circle { radius } => out.push((self.pose.center, radius)),
             Shape::Box { half } => out.extend(
@@ -494,7 +520,9 @@ impl Placed {
             // passed clean through.
             return match self.shape.for_contact() {
                 Shape::Segment { a, b, .. } => {
-                    line_crossing(self.local(from), self.local(to), a, b).map(Hit::along)
+                    let rotation = self.rotation();
+                    let (from, to) = (self.local(rotation, from), self.local(rotation, to));
+                    line_crossing(from, to, a, b).map(Hit::along)
                 }
                 _ => self.passes_through(from, start, to).map(Hit::through_shape),
             };
@@ -505,7 +533,8 @@ impl Placed {
     /// The first fraction t in [0, 1] of the path `from` → `to` that comes within `r` of the
     /// shape (the shape itself for `r` = 0), for a start farther out.
     fn sweep(&self, from: DVec2, to: DVec2, r: f64) -> Option<f64> {
-        let (p0, p1) = (self.local(from), self.local(to));
+        let rotation = self.rotation();
+        let (p0, p1) = (self.local(rotation, from), self.local(rotation, to));
         match self.shape.for_contact() {
             Shape::Circle { radius } => ray_circle(p0, p1, DVec2::ZERO, radius + r),
             Shape::Segment { a, b, thickness } => ray_capsule(p0, p1, a, b, thickness + r),
@@ -900,7 +929,8 @@ mod tests {
                 DVec2::new(-1.0, 0.5),
                 start.pose.center,
             ] {
-                let (before, after) = (start.local(p), end.local(end.carried(p, dt)));
+                let local = |o: &Placed, p| o.local(o.rotation(), p);
+                let (before, after) = (local(&start, p), local(&end, end.carried(p, dt)));
                 assert!(
                     (before - after).length() < 1e-12,
                     "{dt}: {before} -> {after}"

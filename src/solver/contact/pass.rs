@@ -13,7 +13,7 @@
 //! only shrinks in size (|e·vₙ| ≤ |vₙ| with e ≤ 1), the tangential part only shrinks, and the
 //! position moves only back toward the surface, by at most the step's own travel into it.
 
-use super::obstacle::{Hit, Placed, SLOP, Surface, respond};
+use super::obstacle::{Hit, Lead, Placed, SLOP, Surface, respond};
 use super::reaction::Reactions;
 use crate::solver::forces::sweep::Motion;
 use crate::solver::threads::Threads;
@@ -168,7 +168,7 @@ impl Surroundings<'_> {
     ///
     /// Empty when none has a lead: the common case, a scene whose obstacles stand still, pays
     /// nothing for it.
-    pub(crate) fn leads(&self, dt: f64) -> Vec<f64> {
+    pub(crate) fn leads(&self, dt: f64) -> Vec<Lead> {
         let leads = |k: usize, o: &Placed| moves_first(o, k, self.reactions);
         if !self.obstacles.iter().enumerate().any(|(k, o)| leads(k, o)) {
             return vec![];
@@ -176,7 +176,7 @@ impl Surroundings<'_> {
         self.obstacles
             .iter()
             .enumerate()
-            .map(|(k, o)| if leads(k, o) { dt } else { 0.0 })
+            .map(|(k, o)| o.lead(if leads(k, o) { dt } else { 0.0 }))
             .collect()
     }
 
@@ -418,7 +418,7 @@ pub(crate) fn place(
     from: DVec2,
     heading: DVec2,
     obstacles: &[Placed],
-    (reach, lead): (&[f64], &[f64]),
+    (reach, lead): (&[f64], &[Lead]),
     r: f64,
     ground: Option<f64>,
     touched: impl FnMut(&mut DVec2, Touched),
@@ -436,9 +436,9 @@ pub(crate) fn place(
     let end = *x;
     let view = |k: usize| {
         let o: &Placed = &obstacles[k];
-        let lead = lead.get(k).copied().unwrap_or(0.0);
-        let start = o.carried(from, lead);
-        let heading = if lead > 0.0 {
+        let lead = lead.get(k).copied().unwrap_or_default();
+        let start = o.carried_by(from, lead);
+        let heading = if lead.time > 0.0 {
             heading - o.velocity_at(end)
         } else {
             heading
