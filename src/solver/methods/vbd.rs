@@ -68,9 +68,10 @@ pub struct Vbd {
     /// Each vertex's last contact force from a body, and the body's obstacle (when noted).
     held: Vec<DVec2>,
     held_by: Vec<u32>,
-    /// The start-of-step velocity of the last step and the edits it was under (for the
-    /// adaptive initialisation).
-    last_v: Vec<DVec2>,
+    /// Each vertex's acceleration over the last step as its solve found it (before the passes
+    /// after the step: the air damping, contact), and the edits it was under (for the adaptive
+    /// initialisation).
+    last_a: Vec<DVec2>,
     last_edits: Option<u64>,
     /// Colourings so far, and their wall time, s.
     pub colourings: u64,
@@ -308,39 +309,52 @@ pub fn step(
     }
     let n = s.x.len();
     let springs = s.springs.len();
-    for buf in [&mut vb.x, &mut vb.y, &mut vb.gas, &mut vb.last_v] {
+    for buf in [&mut vb.x, &mut vb.y, &mut vb.gas, &mut vb.last_a] {
         buf.resize(n, DVec2::ZERO);
     }
     let scale = 1.0 + dt * settings.drag;
     let h_over_s = dt / scale;
     let h2 = dt * dt;
-    // The adaptive start needs the last step's start velocity, under the same edits.
+    // The descent starts from x₀ + h v₀ + h² a, a the body forces' share of the acceleration
+    // the last step's solve found (Chen et al.'s adaptive initialisation: a particle resting
+    // on a surface starts where it rests), under the same edits; without a last step, all of
+    // the body forces' acceleration, as a free particle's is. Block descent moves a stiff body
+    // as a whole by about m/(m + h²Σk) of the remaining way a sweep (1/556 for a strip of 20 g
+    // particles at k = 1e4 and 1/30 s), so the start must carry the body's motion. Until
+    // 2026-12-07 a was 0 without a last step, and measured from the start velocities, after
+    // the damping pass had taken its share: a strip dropped from rest under gravity fell
+    // 0.17 m in 0.5 s at 1/60 s and 0.04 m at 1/30 s, where it falls 0.90 m (with the
+    // scene's damping, μ = 2).
     let adaptive = vb.last_edits == Some(s.edits);
     let data = (
-        (&mut vb.x[..], &mut vb.y[..], &mut vb.last_v[..]),
+        (&mut vb.x[..], &mut vb.y[..], &vb.last_a[..]),
         (&s.x[..], &s.v[..], &s.f[..]),
         &s.inv_mass[..],
     );
-    threads.each(springs, data, |((x, y, last_v), (x0, v0, f), w)| {
+    threads.each(springs, data, |((x, y, last_a), (x0, v0, f), w)| {
         for i in 0..x.len() {
             if w[i] == 0.0 {
                 // A pinned or held particle moves as it is moved.
                 x[i] = x0[i] + v0[i] * dt;
                 y[i] = x[i];
-                last_v[i] = v0[i];
                 continue;
             }
             let body = f[i] * w[i];
             y[i] = x0[i] + (v0[i] + body * dt) * h_over_s;
             let mut start = x0[i] + v0[i] * dt;
             let g = body.length();
-            if adaptive && g > 0.0 {
+            if g > 0.0 {
+                // The body forces' share of the last step's acceleration, or all of it with no
+                // last step to read (see `adaptive` above).
                 let along = body / g;
-                let a = ((v0[i] - last_v[i]) / dt).dot(along).clamp(0.0, g);
+                let a = if adaptive {
+                    last_a[i].dot(along).clamp(0.0, g)
+                } else {
+                    g
+                };
                 start += along * (a * h2);
             }
             x[i] = start;
-            last_v[i] = v0[i];
         }
     });
     vb.last_edits = Some(s.edits);
@@ -495,11 +509,18 @@ pub fn step(
         }
     }
     let inv_h = 1.0 / dt;
-    let data = (&mut s.v[..], &vb.x[..], &s.x[..], &s.inv_mass[..]);
-    threads.each(springs, data, |(v, x, x0, w)| {
+    let data = (
+        (&mut s.v[..], &mut vb.last_a[..]),
+        &vb.x[..],
+        &s.x[..],
+        &s.inv_mass[..],
+    );
+    threads.each(springs, data, |((v, a), x, x0, w)| {
         for i in 0..v.len() {
             if w[i] != 0.0 {
-                v[i] = (x[i] - x0[i]) * inv_h;
+                let end = (x[i] - x0[i]) * inv_h;
+                a[i] = (end - v[i]) * inv_h;
+                v[i] = end;
             }
         }
     });
