@@ -521,6 +521,9 @@ pub fn step(
                 let end = (x[i] - x0[i]) * inv_h;
                 a[i] = (end - v[i]) * inv_h;
                 v[i] = end;
+            } else {
+                // Moved by hand, not by its forces: a particle let go starts with none.
+                a[i] = DVec2::ZERO;
             }
         }
     });
