@@ -2,14 +2,16 @@
 //! and one particle's response with friction and restitution ([`obstacle`]); the contact pass
 //! that the step runs after the position update ([`collide`]), or only its velocities after a
 //! solve that kept contact itself ([`settle`]); contact between particles, with their neighbour
-//! lists ([`pairs`]); contact inside the large-step methods' solves (`inside`); and the impulses
-//! the obstacles take back ([`reaction`]).
+//! lists ([`pairs`]); contact inside the large-step methods' solves (`inside`), and where VBD's
+//! descent starts a body landing on a surface (`landing`); and the impulses the obstacles take
+//! back ([`reaction`]).
 //!
 //! It reads the state (`solver::state`), the sweep's motion (`solver::forces`) and the threads;
 //! the methods above call it (XPBD pushes pairs apart inside its substeps) and the step runs
 //! its pass.
 
 pub(crate) mod inside;
+pub(crate) mod landing;
 pub mod obstacle;
 pub mod outline;
 pub mod pairs;

@@ -41,6 +41,7 @@
 //! the one-thread sweep bit for bit.
 
 use crate::solver::contact::inside::InSolve;
+use crate::solver::contact::landing::Landing;
 use crate::solver::state::State;
 use crate::solver::threads::Threads;
 use crate::solver::threads::team::Shared;
@@ -73,6 +74,8 @@ pub struct Vbd {
     /// initialisation).
     last_a: Vec<DVec2>,
     last_edits: Option<u64>,
+    /// The buffers that hold a landing body's start back ([`Landing`]).
+    landing: Landing,
     /// Colourings so far, and their wall time, s.
     pub colourings: u64,
     pub colouring_seconds: f64,
@@ -358,6 +361,10 @@ pub fn step(
         }
     });
     vb.last_edits = Some(s.edits);
+    if let Some(c) = contact {
+        // A landing body starts where it first touches, whole ([`Landing`]).
+        vb.landing.hold_back(&mut vb.x, s, c);
+    }
     // The start of the descent: the inertial one, or the start-of-step positions where those
     // give the lower objective (at very large steps, h·ω ≫ 1, the inertial start lies far up
     // the springs' potential and a few iterations from it leave energy in the cloth; from x₀
