@@ -932,6 +932,57 @@ fn the_panel_keeps_a_scenes_values_outside_its_ranges() {
     assert!(bad.is_empty(), "the app's log:\n{bad}");
 }
 
+/// A moving obstacle dragged in the app keeps its own spin while held and gets its own motion
+/// back when let go: a box turning at 0.8 rad/s (a scene file's `Moving`), dragged 0.1 m right
+/// and 0.1 m up while the steps run, follows the cursor turning, then stays where it was let go
+/// and turns on.
+#[test]
+fn a_dragged_moving_obstacle_keeps_its_own_motion() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let Some((display, _xvfb)) = gui_display(&["xdotool"]) else {
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("hooke-spinner-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("spinner.ron"),
+        "(ground: Some(0.0), obstacles: [
+            Moving(shape: Box(center: (0.5, 0.4), half: (0.15, 0.03)), spin: 0.8)])",
+    )
+    .unwrap();
+    let s = Session::start_in(&display, "spinner.ron", &dir, &dir);
+    if s.status()["paused"] == true {
+        s.key("g");
+    }
+    let pose = |st: &serde_json::Value| {
+        let f = |v: &serde_json::Value| v.as_f64().unwrap();
+        let c = &st["obstacles"][0];
+        (f(&c[0]), f(&c[1]), f(&st["obstacle_angles"][0]))
+    };
+    let start = pose(&s.expect("running", |st| st["paused"] == false));
+    s.expect("turning", |st| pose(st).2 > start.2 + 0.1);
+    // Pressed at its centre, dragged and held there.
+    s.move_to(0.5, 0.4);
+    s.x(&["mousedown", "1"]);
+    std::thread::sleep(Duration::from_millis(200));
+    for i in 1..=5 {
+        let t = i as f64 / 5.0;
+        s.move_to(0.5 + 0.1 * t, 0.4 + 0.1 * t);
+    }
+    let held = s.expect("the box at the cursor", |st| {
+        let (x, y, _) = pose(st);
+        (x - 0.6).abs() < 0.01 && (y - 0.5).abs() < 0.01
+    });
+    s.expect("turning while held", |st| pose(st).2 > pose(&held).2 + 0.1);
+    s.x(&["mouseup", "1"]);
+    let let_go = s.expect("let go", |st| st["paused"] == false);
+    s.expect("turning where it was let go", |st| {
+        let ((x, y, a), (x0, y0, a0)) = (pose(st), pose(&let_go));
+        (x - x0).abs() < 1e-9 && (y - y0).abs() < 1e-9 && a > a0 + 0.1
+    });
+    assert!(bad_lines(&s.log()).is_empty(), "{}", s.log());
+}
+
 /// Sends `window` a close request as a window manager does (a `WM_DELETE_WINDOW` client
 /// message), through libX11 from Python's ctypes: this xdotool's `windowclose` destroys the
 /// window instead of asking it to close.

@@ -95,6 +95,8 @@ pub fn drive(
             "pinned": app.pinned.iter().len(),
             // Each obstacle's centre (in no particular order).
             "obstacles": app.obstacles.iter().map(|p| [p.center.x, p.center.y]).collect::<Vec<_>>(),
+            // Their rotations, rad, in the same order.
+            "obstacle_angles": app.obstacles.iter().map(|p| p.angle).collect::<Vec<_>>(),
             "held": solver.kinematic,
             "springs_torn": app.tearing.torn,
             "tear": params.tear,
