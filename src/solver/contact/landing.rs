@@ -24,6 +24,7 @@
 //! particle resting on a surface comes at it by nothing and starts where its guess is, as does
 //! every particle clear of the surfaces.
 
+use super::groups::{join, root};
 use super::inside::InSolve;
 use crate::solver::state::State;
 use glam::DVec2;
@@ -79,10 +80,7 @@ impl Landing {
         for sp in &s.springs {
             let (a, b) = (sp.a as usize, sp.b as usize);
             if self.share[a] != NOT_LANDING && self.share[b] != NOT_LANDING {
-                let (ra, rb) = (root(group, sp.a), root(group, sp.b));
-                if ra != rb {
-                    group[ra.max(rb) as usize] = ra.min(rb);
-                }
+                join(group, sp.a, sp.b);
             }
         }
         // Each group's least share, kept at its root (a root's own share is never larger:
@@ -156,16 +154,6 @@ const KEEP: f64 = 0.5;
 /// The most sweeps over the springs that bring a body down (each brings at least one more row
 /// of a body whose springs come in an unlucky order).
 const SWEEPS: usize = 16;
-
-/// The root of `i`'s group, halving the path on the way.
-fn root(group: &mut [u32], mut i: u32) -> u32 {
-    while group[i as usize] != i {
-        let up = group[group[i as usize] as usize];
-        group[i as usize] = up;
-        i = up;
-    }
-    i
-}
 
 #[cfg(test)]
 mod tests {

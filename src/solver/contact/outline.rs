@@ -37,6 +37,7 @@
 //! two ends take the whole push and the velocity pass, and an obstacle that stands for a body
 //! takes back the impulse ([`Reactions`]).
 
+use super::groups::{join, root};
 use super::obstacle::{Placed, SLOP, Surface, respond};
 use super::reaction::Reactions;
 use crate::solver::state::State;
@@ -514,18 +515,8 @@ impl Outlines {
         let n = s.x.len();
         // Bodies: union–find over the springs.
         let mut parent: Vec<u32> = (0..n as u32).collect();
-        fn root(parent: &mut [u32], mut i: u32) -> u32 {
-            while parent[i as usize] != i {
-                parent[i as usize] = parent[parent[i as usize] as usize];
-                i = parent[i as usize];
-            }
-            i
-        }
         for sp in &s.springs {
-            let (ra, rb) = (root(&mut parent, sp.a), root(&mut parent, sp.b));
-            if ra != rb {
-                parent[ra.max(rb) as usize] = ra.min(rb);
-            }
+            join(&mut parent, sp.a, sp.b);
         }
         self.body = (0..n as u32).map(|i| root(&mut parent, i)).collect();
         let (spans, adjacent) = super::pairs::spring_neighbours(s);
