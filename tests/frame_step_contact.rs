@@ -312,9 +312,9 @@ fn strip_cells(app: &App) -> Vec<f64> {
 
 /// The dropped strip under each large-step method at 1/60 and 1/30 s for 1 s: the highest
 /// energy at the end of a step, the highest point once it has landed, and the cells turned
-/// inside out at the end. A figure of the guide (docs/large-steps.md): projective dynamics and
-/// BDF2 flatten the strip's cells as they hold the landing particles out of the ground one by
-/// one, and the strip lands turned over and gains energy (VBD did too until 2026-12-07:
+/// inside out at the end. A figure of the guide (docs/large-steps.md): BDF2 flattens the
+/// strip's cells as it holds the landing particles out of the ground one by one, and the strip
+/// lands turned over and gains energy (VBD and projective dynamics did too until 2026-12-07:
 /// [`a_layer_landing_flat_keeps_its_cells`]). `cargo test --release --test
 /// frame_step_contact strip_drop_figures -- --ignored --nocapture`.
 #[test]
@@ -350,15 +350,22 @@ fn strip_drop_figures() {
 /// A layer landing flat at a frame's step lands whole under the methods that hold it together:
 /// [`dropped_strip`] (its rows a centimetre apart, landing at 2 m/s: 3.3 cm a step at 1/60 s,
 /// 6.6 cm at 1/30 s, so that the whole strip's guess lies under the ground) under implicit
-/// Euler and VBD at 1/60 and 1/30 s for 1 s. No step ends with a cell turned over or with
-/// more energy than the start, and the rows end at least half their spacing apart. VBD held
-/// each particle out on its own until 2026-12-07: both rows landed on the ground's line, the
-/// energy rose from 3.9 J to 34.4 J, and at 1/30 s all 47 cells turned over. Projective
-/// dynamics and BDF2 still flatten it (`strip_drop_figures`; docs/large-steps.md); XPBD
-/// keeps its cells but peaks at 4.1 J at 1/60 s.
+/// Euler, projective dynamics and VBD at 1/60 and 1/30 s for 1 s. No step ends with a cell
+/// turned over or with more energy than the start, and the rows end at least half their
+/// spacing apart. Until 2026-12-07 VBD held each particle out on its own: both rows landed on
+/// the ground's line, the energy rose from 3.9 J to 34.4 J, and at 1/30 s all 47 cells turned
+/// over; projective dynamics, whose lower row's forces stopped the strip at twice its mass,
+/// threw it up and turned its cells (25.0 J and 26 cells at 1/60 s, 43.8 J and all 47 at
+/// 1/30 s). BDF2 still flattens it (`strip_drop_figures`; docs/large-steps.md); XPBD keeps
+/// its cells but peaks at 4.1 J at 1/60 s.
 #[test]
 fn a_layer_landing_flat_keeps_its_cells() {
-    for m in [Integrator::ImplicitEuler, Integrator::Vbd] {
+    let methods = [
+        Integrator::ImplicitEuler,
+        Integrator::ProjectiveDynamics,
+        Integrator::Vbd,
+    ];
+    for m in methods {
         for dt in [FRAME, 1.0 / 30.0] {
             let mut app = dropped_strip(m, dt);
             let start = strip_cells(&app);
@@ -383,6 +390,46 @@ fn a_layer_landing_flat_keeps_its_cells() {
             assert!(
                 apart > 0.5 * 0.0104,
                 "{m:?} at {dt:.4} s: rows {apart:.4} m apart"
+            );
+        }
+    }
+}
+
+/// A body sliding round an obstacle's corner, and the shipped contact scenes that make it, at a
+/// frame's step under projective dynamics: [`dropped_strip`] dropped instead onto a box tilted
+/// 0.6 rad, whose low corner it slides round onto the ground, at 1/60 and 1/30 s, and the
+/// shipped `paddle` (a strip carried round a moving paddle's corner) and `cloth_on_ball` at
+/// 1/60 s, for 3 s: no step ends with more energy than the start. Until 2026-12-07, when a
+/// line search began sizing the contact forces inside its solve, the strip peaked at 21.9 J and
+/// 31.5 J from 14.2 J, the `paddle` at 22.7 J from 10.4 J and `cloth_on_ball` at 22.0 J from
+/// 13.3 J (docs/large-steps.md).
+#[test]
+fn projective_dynamics_slides_round_corners_at_a_frames_step() {
+    let text = "(gravity: (0.0, -9.8), damping: 2.0, ground: Some(0.0),
+        obstacles: [Box(center: (0.5, 0.4), half: (0.3, 0.02), angle: 0.6)],
+        generate: [Grid(cols: 48, rows: 2, min: (0.25, 0.75), max: (0.75, 0.7604), mass: 0.02,
+             stiffness: 10000.0, shear: true, pin: None)],
+        contact: Some((radius: 0.004, friction: 0.6, restitution: 0.0)))";
+    let tilted: Scene = ron::from_str(text).unwrap();
+    let shipped = |name: &str| hooke::scene::presets::resolve(name).unwrap().scene;
+    let cases = [
+        ("tilted box", tilted.clone(), FRAME),
+        ("tilted box", tilted, 1.0 / 30.0),
+        ("paddle", shipped("paddle"), FRAME),
+        ("cloth_on_ball", shipped("cloth_on_ball"), FRAME),
+    ];
+    for (name, mut scene, dt) in cases {
+        scene.integrator = Integrator::ProjectiveDynamics;
+        scene.dt = dt;
+        let mut app = app_with(scene);
+        let gravity = app.world().resource::<SimParams>().gravity;
+        let e0 = solver(&app).energy(gravity).total();
+        for k in 1..=(3.0 / dt).round() as u64 {
+            step(&mut app, 1);
+            let energy = solver(&app).energy(gravity).total();
+            assert!(
+                energy <= e0 * (1.0 + 1e-9),
+                "{name} at {dt:.4} s, step {k}: {energy:.3} J from {e0:.3} J"
             );
         }
     }

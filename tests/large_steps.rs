@@ -453,8 +453,10 @@ fn the_direct_minimiser_finds_the_hanging_chains_static_shape() {
 /// cloth32 falls onto it at dt = 1/30 s, and after each step no free particle is below it. The
 /// implicit methods tested the start-of-step position, as the explicit methods do, and ended
 /// steps 1–2 cm under it; XPBD's sweeps pulled its bottom row 0.75 mm under. Particles the
-/// implicit methods put on the ground are at rest vertically (BDF2 and VBD included; BDF2 clamps
-/// its end positions inside its step). The same with the ground raised.
+/// implicit methods put on the ground (within a nanometre of it: projective dynamics' contact
+/// forces, sized by a line search, hold a landed row a hair above it, 1e-30 m, still settling
+/// by nanometres a step) are at rest vertically, to a micrometre a second (BDF2 and VBD
+/// included; BDF2 clamps its end positions inside its step). The same with the ground raised.
 #[test]
 fn large_step_methods_end_every_step_on_or_above_the_ground() {
     let cloth = hooke::scene::presets::resolve("cloth32").unwrap().scene;
@@ -475,11 +477,11 @@ fn large_step_methods_end_every_step_on_or_above_the_ground() {
                         "{integrator}, ground {ground}: particle {i} at y = {} after step {n}",
                         x.y
                     );
-                    if x.y == ground && i >= 32 {
+                    if x.y <= ground + 1e-9 && i >= 32 {
                         touching += 1;
                         if integrator != Integrator::Xpbd {
                             assert!(
-                                v.y >= 0.0,
+                                v.y >= -1e-6,
                                 "{integrator}: particle {i} on the ground, v {v}"
                             );
                         }
@@ -560,23 +562,30 @@ fn implicit_euler_rests_a_gas_ball_on_the_ground_at_a_frames_step() {
     }
 }
 
-/// Implicit Euler and VBD land the shipped soft box, thrown at 0.5 m/s, at 1/30 s with every
-/// triangle the right way round, at 90 % of its height or more and its energy never above its
-/// start, on the bare ground and with contact set (radius 5 mm, friction 0.5); with contact set
-/// the friction stops its slide within 0.25 m (0.13 m under implicit Euler; 0.49 m without
-/// friction). Before the ground was held in the solves implicit Euler crushed the box to
-/// 0.066 m on the bare ground and rose to 105 J with contact set; before a landing body's
-/// descent started where it first touches (2026-12-07), VBD rose from 38.4 J to 89.2 J on the
-/// bare ground and turned 7 of its 49 cells.
+/// Implicit Euler, projective dynamics and VBD land the shipped soft box, thrown at 0.5 m/s,
+/// at 1/30 s with every triangle the right way round, at 90 % of its height or more and its
+/// energy never above its start, on the bare ground and with contact set (radius 5 mm,
+/// friction 0.5); with contact set the friction stops its slide within 0.25 m (0.13 m under
+/// implicit Euler; 0.49 m without friction). Before the ground was held in the solves implicit
+/// Euler crushed the box to 0.066 m on the bare ground and rose to 105 J with contact set;
+/// before a landing body's descent started where it first touches (2026-12-07), VBD rose from
+/// 38.4 J to 89.2 J on the bare ground and turned 7 of its 49 cells; before the line search
+/// sized its contact forces (the same day), projective dynamics rose to 188.7 J on the bare
+/// ground.
 #[test]
-fn implicit_euler_and_vbd_land_a_box_at_a_frames_step() {
+fn three_backward_euler_methods_land_a_box_at_a_frames_step() {
     let soft_box = hooke::scene::presets::resolve("soft_box").unwrap().scene;
     let set = ContactSettings {
         radius: 0.005,
         friction: 0.5,
         ..Default::default()
     };
-    for (integrator, contact) in [Integrator::ImplicitEuler, Integrator::Vbd]
+    let methods = [
+        Integrator::ImplicitEuler,
+        Integrator::ProjectiveDynamics,
+        Integrator::Vbd,
+    ];
+    for (integrator, contact) in methods
         .into_iter()
         .flat_map(|m| [(m, None), (m, Some(set))])
     {

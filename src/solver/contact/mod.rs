@@ -2,9 +2,10 @@
 //! and one particle's response with friction and restitution ([`obstacle`]); the contact pass
 //! that the step runs after the position update ([`collide`]), or only its velocities after a
 //! solve that kept contact itself ([`settle`]); contact between particles, with their neighbour
-//! lists ([`pairs`]); contact inside the large-step methods' solves (`inside`), and where VBD's
-//! descent starts a body landing on a surface (`landing`); and the impulses the obstacles take
-//! back ([`reaction`]).
+//! lists ([`pairs`]); contact inside the large-step methods' solves (`inside`), the contact
+//! forces their global solves learn and the step each body takes along them (`support`), and
+//! where VBD's descent starts a body landing on a surface (`landing`); and the impulses the
+//! obstacles take back ([`reaction`]).
 //!
 //! It reads the state (`solver::state`), the sweep's motion (`solver::forces`) and the threads;
 //! the methods above call it (XPBD pushes pairs apart inside its substeps) and the step runs
@@ -18,6 +19,7 @@ pub mod outline;
 pub mod pairs;
 mod pass;
 pub mod reaction;
+pub(crate) mod support;
 
 pub(crate) use pass::moves_first;
 pub(crate) use pass::reaches;

@@ -2,7 +2,7 @@
 //! from step to step, and implicit Euler's counters. One struct for both: implicit Euler's
 //! Newton iterates use the stage buffers, so a scene never holds two sets.
 
-use crate::solver::contact::inside::Support;
+use crate::solver::contact::support::Support;
 use crate::solver::forces::material::GasJacobian;
 use crate::solver::forces::stiffness::{Block, Sym2};
 use crate::solver::threads::SpringBuffers;

@@ -206,7 +206,7 @@ fn newton_step(
 }
 
 /// The contact forces carried from the last solves
-/// ([`crate::solver::contact::inside::Support`]) added to the right-hand side in `sc.cg.z` as
+/// ([`crate::solver::contact::support::Support`]) added to the right-hand side in `sc.cg.z` as
 /// their impulse over dt (free particles only); returns |b|², anew when they are there.
 fn with_support(
     s: &State,

@@ -1,0 +1,376 @@
+//! The contact forces inside the global solves of projective dynamics, BDF2 and implicit Euler:
+//! what each particle's contact gives it, learned over the solve's iterations ([`Support`]),
+//! and, under projective dynamics, one line search that sizes each iteration's change of those
+//! forces by how the whole iterate answers it ([`Support::line_search`]).
+//!
+//! Why the line search: the forces are learned particle by particle, each from its own push
+//! with its own mass as the step, over-relaxed up to [`SUPPORT_GAIN`] where springs tie it to
+//! the rest of its body. But a body meets the surfaces as a whole: a strip two particles deep
+//! landing flat was stopped by its lower row's forces at four times that row's own mass, twice
+//! the strip's, and was thrown up (its energy rose from 3.9 J to 25 J at 1/60 s and 44 J at
+//! 1/30 s); a box eight rows high needs eight times its bottom row's. One more solve with the
+//! kept factor answers how every particle would move under the change, and that answer sizes
+//! it (`docs/performance-log.md`, 2026-12-07).
+
+use super::inside::InSolve;
+use crate::solver::state::State;
+use glam::DVec2;
+
+/// The largest over-relaxation of the contact forces' update (see [`Support`]): on the shipped
+/// pile at 1/60 s (2-core AMD EPYC, 2026-12-04), 1 left pairs at 86 % of 2r under projective
+/// dynamics, 4 at 98 % with the energy falling every step, 20 made BDF2 gain energy (181 J to
+/// 358 J).
+const SUPPORT_GAIN: f64 = 4.0;
+
+/// The over-relaxation g from which a particle's change of force enters the line search:
+/// springs at least as stiff, on the step's scale, as the particle's own inertia
+/// (ĥ² Σk ≥ s m). Below it each particle moves on its own within a step, and its own mass is
+/// its step already.
+const LINE_SEARCH_FROM: f64 = 2.0;
+
+/// The contact forces that the solves of projective dynamics, BDF2 and implicit Euler build
+/// up over their iterations, so that their global solves see the support that contact gives a
+/// particle, and the bodies above it rest on it.
+///
+/// Why: those solves are global (a factor, a conjugate gradient) and know nothing of contact.
+/// Holding their iterate out of the surfaces after each solve is not enough at a frame's
+/// step: the next solve pulls the particles back in by the weight above them, and the
+/// projection's fixed point is not the constrained step (30 and 100 iterations of projective
+/// dynamics left the pile at 354 J and 220 J from 181 J).
+///
+/// How: a particle pushed by Δ after a solve gains the force ρΔ with ρ = g s m/ĥ² (Uzawa's
+/// update on the contact constraints, with the particle's own mass as its step: the solve's
+/// matrix is at least s M/ĥ², so with g = 1 the update never moves a particle further than
+/// Δ); one that moved away from its contact since the last projection loses that share along
+/// its force, down to none. A particle joined to others by springs stiff at the step's scale
+/// carries the whole body along, which its own mass underestimates, so its update is
+/// over-relaxed: g = min([`SUPPORT_GAIN`], 1 + ĥ² Σk/(s m)), with Σk its springs' stiffness. A
+/// lone particle keeps g = 1 (with 4 it overshot the surface and left it, every other
+/// iteration). The push's tangential part, friction's hold, enters the force too. The forces
+/// start from none each step: carried over from the last step (as rigid-body engines
+/// warm-start their impulses), an impact's force launched the particles on the next step (the
+/// pile rose to 893 J under projective dynamics and 11,932 J under BDF2).
+///
+/// Under projective dynamics, [`Self::line_search`] then resizes each iteration's change of
+/// the forces.
+#[derive(Debug, Default, Clone)]
+pub struct Support {
+    /// Each particle's contact force, N.
+    force: Vec<DVec2>,
+    /// Each particle's over-relaxation g.
+    gain: Vec<f64>,
+    /// The normal of each particle's last contact (a surface's, or a pair push's direction).
+    normal: Vec<DVec2>,
+    /// Where each particle was after the last projection.
+    last: Vec<DVec2>,
+    /// The iterate before this projection.
+    before: Vec<DVec2>,
+    /// The obstacle whose surface last held each particle ([`NO_OBSTACLE`]: the ground, a
+    /// pair, or none), and the push of the last projection.
+    obstacle: Vec<u32>,
+    push: Vec<DVec2>,
+    /// The last projection's s/ĥ².
+    stiffness: f64,
+    /// The change of each particle's force in the last projection, where it enters the line
+    /// search (zero elsewhere).
+    change: Vec<DVec2>,
+}
+
+/// No obstacle holds the particle.
+const NO_OBSTACLE: u32 = u32::MAX;
+
+impl Support {
+    /// Readies the buffers for a step of the state's particles starting from `start`, with no
+    /// force; `h2_over_s` is ĥ²/s.
+    pub(crate) fn start(&mut self, s: &State, start: &[DVec2], h2_over_s: f64) {
+        let n = start.len();
+        self.force.clear();
+        self.force.resize(n, DVec2::ZERO);
+        self.gain.clear();
+        self.gain.resize(n, 0.0);
+        self.normal.clear();
+        self.normal.resize(n, DVec2::ZERO);
+        for sp in &s.springs {
+            self.gain[sp.a as usize] += sp.k;
+            self.gain[sp.b as usize] += sp.k;
+        }
+        for (g, &m) in self.gain.iter_mut().zip(&s.mass) {
+            *g = (1.0 + h2_over_s * *g / m).min(SUPPORT_GAIN);
+        }
+        self.last.clear();
+        self.last.extend_from_slice(start);
+        self.obstacle.clear();
+        self.obstacle.resize(n, NO_OBSTACLE);
+        self.push.clear();
+        self.push.resize(n, DVec2::ZERO);
+        self.change.clear();
+        self.change.resize(n, DVec2::ZERO);
+    }
+
+    /// Notes, for the obstacles that stand for bodies, the impulse each gave its particles
+    /// in the step ([`super::reaction`]): the contact force of the solve's equation after its
+    /// last projection (the learned force, less the over-relaxation of the last push) times
+    /// the equation's step `h`, M (z − y)/h² = f. That is the momentum the contact gave the
+    /// particle: h = dt under projective dynamics and implicit Euler; h = 2/3 dt under BDF2,
+    /// whose history forgets a held particle's jump, so that no later step carries a third of
+    /// it again.
+    pub(crate) fn note_reactions(&self, c: &InSolve, mass: &[f64], h: f64) {
+        if !c.notes() {
+            return;
+        }
+        for (i, f) in self.force.iter().enumerate() {
+            let o = self.obstacle[i];
+            if *f == DVec2::ZERO || o == NO_OBSTACLE {
+                continue;
+            }
+            let held = *f - self.push[i] * ((self.gain[i] - 1.0) * self.stiffness * mass[i]);
+            c.note(
+                o as usize,
+                i,
+                (self.last[i], self.normal[i]),
+                held * h,
+                None,
+            );
+        }
+    }
+
+    /// The normal of the contact holding particle `i` at the end of the last solve, if one
+    /// does.
+    pub(crate) fn held_along(&self, i: usize) -> Option<DVec2> {
+        let held = self.force.get(i).is_some_and(|f| *f != DVec2::ZERO);
+        held.then(|| self.normal[i])
+    }
+
+    /// No contact this step: no force.
+    pub(crate) fn start_without(&mut self) {
+        self.force.clear();
+    }
+
+    /// Adds each particle's force times `scale` (ĥ² for a residual in force·ĥ², ĥ for an
+    /// impulse) to `out`.
+    pub(crate) fn add_to(&self, out: &mut [DVec2], scale: f64) {
+        for (o, f) in out.iter_mut().zip(&self.force) {
+            *o += *f * scale;
+        }
+    }
+
+    /// The iterate `x`, kept out of contact by `c`, and the forces learned from the push:
+    /// `stiffness` is s/ĥ² (the mass of the solve's matrix per kilogram and square metre).
+    /// Notes the change of the forces that the line search may resize
+    /// ([`Self::line_search`]).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn project(
+        &mut self,
+        c: &InSolve,
+        x: &mut [DVec2],
+        from: &[DVec2],
+        mass: &[f64],
+        w: &[f64],
+        scratch: &mut [DVec2],
+        stiffness: f64,
+    ) {
+        self.before.clear();
+        self.before.extend_from_slice(x);
+        self.stiffness = stiffness;
+        self.change.fill(DVec2::ZERO);
+        let Support {
+            force,
+            gain,
+            normal,
+            last,
+            before,
+            obstacle,
+            push: pushed,
+            change,
+            ..
+        } = self;
+        c.project(x, from, w, scratch, |i, x, held| {
+            let push = x - before[i];
+            if push == DVec2::ZERO && held.is_none() && force[i] == DVec2::ZERO {
+                // Neither touching nor held: nothing to learn, and nothing read until a push
+                // writes it all (most of a cloth above the ground, at every iteration).
+                return;
+            }
+            // The surface's normal, or a pair's push when no surface touched the particle.
+            if let Some(n) = held.map(|h| h.normal).or_else(|| push.try_normalize()) {
+                normal[i] = n;
+            }
+            if let Some(h) = held {
+                obstacle[i] = h.obstacle.map_or(NO_OBSTACLE, |o| o as u32);
+            } else if push != DVec2::ZERO {
+                obstacle[i] = NO_OBSTACLE;
+            }
+            pushed[i] = push;
+            let rho = gain[i] * stiffness * mass[i];
+            let f = &mut force[i];
+            if push != DVec2::ZERO {
+                *f += push * rho;
+                if gain[i] >= LINE_SEARCH_FROM {
+                    change[i] = push * rho;
+                }
+            } else if *f != DVec2::ZERO {
+                // Moved away from the contact since the last projection: the force eases.
+                let along = *f / f.length();
+                let away = (x - last[i]).dot(along);
+                if away > 0.0 {
+                    let left = (f.length() - away * gain[i] * stiffness * mass[i]).max(0.0);
+                    *f = along * left;
+                }
+            }
+            last[i] = x;
+        });
+    }
+
+    /// ĥ² times the change δf of the forces that the last projection noted for the line
+    /// search, into `out`; whether there is any. The solve's answer to it, w = Ã⁻¹ ĥ² δf, is
+    /// how the iterate would move under it: [`Self::line_search`] reads it.
+    pub(crate) fn change_to_answer(&self, h2: f64, out: &mut [DVec2]) -> bool {
+        let mut any = false;
+        for (o, &d) in out.iter_mut().zip(&self.change) {
+            *o = d * h2;
+            any |= d != DVec2::ZERO;
+        }
+        any
+    }
+
+    /// The step α along the last projection's change δf of the forces, given `answer`, the
+    /// solve's answer w to that change ([`Self::change_to_answer`]), with `mass` and the
+    /// inverse masses `w` of the particles: the forces take α δf instead of δf, and the
+    /// iterate `x` moves where the next solve would put it, from where the last solve left it
+    /// (before the projection) by α w. Returns α (1, and nothing moved, where there was no
+    /// change).
+    ///
+    /// α is the exact line search on the contact's dual problem (the forces' own, for which the
+    /// iterate's violation of the contacts is the gradient) along δf: Σ δf·δf/ρ over Σ δf·w,
+    /// with ρ = g s m/ĥ² the update that made δf. It is held to at most the free particles'
+    /// mass over the changed particles' g m, what stopping them all as one rigid body would
+    /// take: answered by a stiff body's bending alone, a few particles would learn the force
+    /// that crushes it (a soft box thrown at a wall at 10 m/s at 1/60 s, its front column's
+    /// forces so learned, rose from 25 J to 333 J and never came to rest; held, it peaks at
+    /// 30 J, against 34 J before the line search). A strip two rows deep landing flat takes α = 1/2 of
+    /// its lower row's fourfold update (twice that row's mass, the strip's), a box eight rows
+    /// high resting on its bottom row α = 2.
+    pub(crate) fn line_search(
+        &mut self,
+        x: &mut [DVec2],
+        mass: &[f64],
+        w: &[f64],
+        answer: &[DVec2],
+    ) -> f64 {
+        let (mut descent, mut curvature, mut changed) = (0.0, 0.0, 0.0);
+        for (i, d) in self.change.iter().enumerate() {
+            if *d != DVec2::ZERO {
+                let g = self.gain[i];
+                descent += d.length_squared() / (g * self.stiffness * mass[i]);
+                curvature += d.dot(answer[i]);
+                changed += g * mass[i];
+            }
+        }
+        if changed == 0.0 {
+            return 1.0;
+        }
+        let free: f64 = mass
+            .iter()
+            .zip(w)
+            .filter(|(_, w)| **w != 0.0)
+            .map(|(m, _)| m)
+            .sum();
+        let alpha = (descent / curvature).min(free / changed);
+        let alpha = if alpha.is_finite() && alpha > 0.0 {
+            alpha
+        } else {
+            1.0
+        };
+        for (f, d) in self.force.iter_mut().zip(&self.change) {
+            *f += *d * (alpha - 1.0);
+        }
+        for ((x, &before), &a) in x.iter_mut().zip(&self.before).zip(answer) {
+            *x = before + a * alpha;
+        }
+        alpha
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solver::fixtures::grid;
+
+    /// A block of 3 × 8 particles, its bottom row pushed up by the ground by the same Δ, with a
+    /// lone particle beside it (no springs: g = 1, outside the line search) pushed too.
+    /// Answered as a rigid block would answer (each of its particles moved by the change's
+    /// total over the block's mass: the matrix's s M/ĥ² alone), the step stops the block
+    /// whole: α = 24/(3 · 4), and the block's forces sum to its mass times Δ s/ĥ². Answered as
+    /// a stiff block would, its bottom row alone moving (as if each of its particles weighed
+    /// 40 of them), the exact step, 10, is held to what stopping every free particle whole
+    /// would take, 25/12. The iterate moves from where the solve left it by α w.
+    #[test]
+    fn the_line_search_stops_a_body_whole() {
+        let (w, h) = (3u32, 8u32);
+        let mut s = State::default();
+        for r in 0..h {
+            for c in 0..w {
+                s.x.push(DVec2::new(0.01 * c as f64, 0.01 * r as f64));
+            }
+        }
+        s.x.push(DVec2::new(0.5, 0.0));
+        let n = s.x.len();
+        s.v = vec![DVec2::ZERO; n];
+        s.f = vec![DVec2::ZERO; n];
+        s.mass = vec![0.02; n];
+        s.inv_mass = vec![50.0; n];
+        s.springs = grid(w, h);
+        let h2 = 1.0 / 900.0;
+        let stiffness = 1.0 / h2;
+        let up = DVec2::new(0.0, 1e-3);
+        let bottom: Vec<usize> = (0..w as usize).chain([n - 1]).collect();
+        let pushed = |support: &mut Support| {
+            support.start(&s, &s.x, h2);
+            support.stiffness = stiffness;
+            support.before = s.x.clone();
+            for &i in &bottom {
+                let rho = support.gain[i] * stiffness * s.mass[i];
+                support.force[i] = up * rho;
+                if support.gain[i] >= LINE_SEARCH_FROM {
+                    support.change[i] = up * rho;
+                }
+            }
+        };
+        let mut support = Support::default();
+        pushed(&mut support);
+        assert_eq!(support.gain[n - 1], 1.0);
+        assert_eq!(support.gain[0], SUPPORT_GAIN);
+        let mut rhs = vec![DVec2::ZERO; n];
+        assert!(support.change_to_answer(h2, &mut rhs));
+        assert_eq!(rhs[n - 1], DVec2::ZERO);
+        let block = 0.02 * (w * h) as f64;
+        let total: DVec2 = rhs.iter().sum();
+        let rigid: Vec<DVec2> = (0..n)
+            .map(|i| {
+                if i < n - 1 {
+                    total / block
+                } else {
+                    DVec2::ZERO
+                }
+            })
+            .collect();
+        let mut x = s.x.clone();
+        let alpha = support.line_search(&mut x, &s.mass, &s.inv_mass, &rigid);
+        assert!((alpha - 2.0).abs() < 1e-12, "{alpha}");
+        let held: DVec2 = support.force[..n - 1].iter().sum();
+        let whole = up * (block * stiffness);
+        assert!(
+            (held - whole).length() < 1e-9 * whole.length(),
+            "{held} against {whole}"
+        );
+        // The lone particle keeps its plain update, and stays where the solve left it.
+        assert_eq!(support.force[n - 1], up * (stiffness * 0.02));
+        assert_eq!(x[n - 1], s.x[n - 1]);
+        assert!((x[5] - (s.x[5] + rigid[5] * alpha)).length() < 1e-15);
+        // A stiff block: the step held to the free particles' mass over the row's g m.
+        pushed(&mut support);
+        let stiff: Vec<DVec2> = rhs.iter().map(|r| *r / (0.02 * 40.0)).collect();
+        let alpha = support.line_search(&mut x, &s.mass, &s.inv_mass, &stiff);
+        assert!((alpha - 25.0 / 12.0).abs() < 1e-12, "{alpha}");
+    }
+}
