@@ -11,6 +11,23 @@ pub(crate) fn bits(v: &[glam::DVec2]) -> Vec<(u64, u64)> {
     v.iter().map(|p| (p.x.to_bits(), p.y.to_bits())).collect()
 }
 
+/// A `w`×`h` block of 20 g particles a centimetre apart at rest (rows listed bottom first, its
+/// bottom row at height `bottom`), joined by [`grid`]'s springs.
+pub(crate) fn block(w: u32, h: u32, bottom: f64) -> super::state::State {
+    let mut s = super::state::State::default();
+    for r in 0..h {
+        for c in 0..w {
+            s.x.push(DVec2::new(0.01 * c as f64, bottom + 0.01 * r as f64));
+            s.v.push(DVec2::ZERO);
+            s.mass.push(0.02);
+            s.inv_mass.push(50.0);
+            s.f.push(DVec2::ZERO);
+        }
+    }
+    s.springs = grid(w, h);
+    s
+}
+
 /// The springs of a row-major `w`×`h` grid, structural and both diagonals, sorted as the
 /// solver packs them.
 pub(crate) fn grid(w: u32, h: u32) -> Vec<PackedSpring> {

@@ -159,7 +159,7 @@ const SWEEPS: usize = 16;
 mod tests {
     use super::super::pass::{Surroundings, reaches};
     use super::*;
-    use crate::solver::fixtures::grid;
+    use crate::solver::fixtures::block;
 
     /// A 3 × 4 block of particles a centimetre apart (rows listed bottom first), falling 3 cm
     /// in the step from 1.5 cm above the ground: its two lower rows' guesses lie under the
@@ -170,17 +170,7 @@ mod tests {
     #[test]
     fn a_falling_block_starts_whole_where_it_first_touches() {
         let (w, h) = (3u32, 4u32);
-        let mut s = State::default();
-        for r in 0..h {
-            for c in 0..w {
-                s.x.push(DVec2::new(0.01 * c as f64, 0.015 + 0.01 * r as f64));
-                s.v.push(DVec2::ZERO);
-                s.mass.push(0.02);
-                s.inv_mass.push(50.0);
-                s.f.push(DVec2::ZERO);
-            }
-        }
-        s.springs = grid(w, h);
+        let s = block(w, h, 0.015);
         let around = Surroundings {
             obstacles: &[],
             ground: Some(0.0),

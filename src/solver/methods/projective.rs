@@ -661,10 +661,7 @@ impl Projective {
                 springs,
                 threads,
             };
-            match &mut self.global {
-                Global::Single(rhs) => global.correct(rhs),
-                Global::Double(rhs) => global.correct(rhs),
-            }
+            self.global.correct(global);
             live = live.or_else(|| engage(self));
             if let Some(c) = live {
                 let (m, w) = (&s.mass[..], &s.inv_mass[..]);
@@ -714,10 +711,7 @@ impl Projective {
             springs,
             threads,
         };
-        match &mut self.global {
-            Global::Single(rhs) => answer.correct(rhs),
-            Global::Double(rhs) => answer.correct(rhs),
-        }
+        self.global.correct(answer);
         let (m, w) = (&s.mass[..], &s.inv_mass[..]);
         (self.support).line_search(&mut self.z, m, w, &self.answer);
         self.line_searches += 1;
@@ -738,6 +732,14 @@ impl Default for Global {
 }
 
 impl Global {
+    /// One global step ([`GlobalStep::correct`]) in the factor's precision.
+    fn correct(&mut self, step: GlobalStep) {
+        match self {
+            Global::Single(rhs) => step.correct(rhs),
+            Global::Double(rhs) => step.correct(rhs),
+        }
+    }
+
     /// Buffers in the precision asked for with `rows` rows: those already held when their
     /// precision is that one (a tearing cloth refactors at every tear), else new ones.
     fn fit(&mut self, single: bool, rows: usize) {
