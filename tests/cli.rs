@@ -286,7 +286,8 @@ fn bad_scene_files() {
 }
 
 /// The large-step methods through the CLI: the iteration flags take effect and the report
-/// says what the solvers did (projective dynamics' factorisation, XPBD's sweeps).
+/// says what the solvers did (projective dynamics' factorisation and contact line searches, XPBD's
+/// sweeps).
 #[test]
 fn large_step_methods_report_their_iterations() {
     let common = [
@@ -303,11 +304,47 @@ fn large_step_methods_report_their_iterations() {
     assert_eq!(r["finite"], true);
     assert_eq!(r["iterations"]["projective"], 7);
     assert_eq!(r["solve"]["projective_iterations_per_step"], 7.0);
+    // Its lower edge reaches the ground in the second step: the contact forces' line search
+    // runs after some of the iterations from then on.
+    let searches = r["solve"]["projective_line_searches_per_step"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        searches > 0.0 && searches < 6.0,
+        "{searches} line searches a step"
+    );
     assert_eq!(r["solve"]["factorizations"], 1);
     assert!(r["solve"]["factorization_seconds"].as_f64().unwrap() > 0.0);
     // The 32² cloth's factor is too small to share between threads.
     assert_eq!(r["solve"]["factor_halves"], 1);
     assert!(r["stable_dt"].is_null());
+    // The rope hangs clear of its ground: no contact in the solve, no line search. The soft
+    // box landing at 1/30 s: a line search after each of its iterations but the last, while
+    // contact acts.
+    let mut args = common.to_vec();
+    args[2] = "rope";
+    args.extend_from_slice(&["--integrator", "projective-dynamics"]);
+    let r = json(&hooke(&args));
+    assert_eq!(r["solve"]["projective_line_searches_per_step"], 0.0);
+    let r = json(&hooke(&[
+        "run",
+        "--scene",
+        "soft_box",
+        "--integrator",
+        "projective-dynamics",
+        "--dt",
+        "1/30",
+        "--time",
+        "2",
+        "--json",
+    ]));
+    let searches = r["solve"]["projective_line_searches_per_step"]
+        .as_f64()
+        .unwrap();
+    assert!(
+        searches > 1.0 && searches <= 9.0,
+        "{searches} line searches a step"
+    );
     let mut args = common.to_vec();
     args.extend_from_slice(&["--integrator", "xpbd", "--xpbd-substeps", "4"]);
     args.extend_from_slice(&["--xpbd-iterations", "3"]);

@@ -125,6 +125,7 @@ impl Workspace {
             newton_iterations_per_step: sc.newton_iterations_per_step(),
             cg_iterations_per_step: sc.cg_iterations_per_step(),
             projective_iterations_per_step: pd.iterations_per_step(),
+            projective_line_searches_per_step: pd.line_searches_per_step(),
             factorizations: pd.factorizations,
             factorization_seconds: pd.factor_seconds,
             symbolic_factorizations: pd.symbolic_factorizations,
@@ -165,6 +166,10 @@ pub struct SolveStats {
     /// Projective dynamics: local/global iterations per time step.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub projective_iterations_per_step: Option<f64>,
+    /// Projective dynamics: line searches of the contact forces per time step, each one more
+    /// solve with the factor (0 where contact never acts inside the solve).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub projective_line_searches_per_step: Option<f64>,
     /// Projective dynamics: factorisations of M + h²L.
     pub factorizations: u64,
     /// Projective dynamics: their wall time, s.

@@ -436,6 +436,12 @@ impl Projective {
     pub fn iterations_per_step(&self) -> Option<f64> {
         (self.steps > 0).then(|| self.iterations as f64 / self.steps as f64)
     }
+
+    /// Mean line searches of the contact forces per step so far (`contact::support`: each one
+    /// more solve with the factor), if any step was taken.
+    pub fn line_searches_per_step(&self) -> Option<f64> {
+        (self.steps > 0).then(|| self.line_searches as f64 / self.steps as f64)
+    }
 }
 
 /// Systems this big or bigger try nested dissection beside minimum degree.
@@ -557,7 +563,9 @@ impl Projective {
     /// iterations, left in [`Self::end`]: every particle's, the eliminated ones (inverse mass
     /// 0) at x₀ + dt v₀ (the target's base and velocity are x₀ and v₀ for them). `s.f`
     /// holds the body forces. With `contact`, every global step's iterate is kept out of the
-    /// surfaces and the other particles ([`InSolve`]) before the next local step reads it.
+    /// surfaces and the other particles ([`InSolve`]) before the next local step reads it, and
+    /// under projective dynamics' own steps (not BDF2's) the change of the contact forces is
+    /// sized by a line search (`contact::support`).
     pub fn solve(
         &mut self,
         s: &State,
