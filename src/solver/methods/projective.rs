@@ -145,10 +145,7 @@ pub struct Projective {
     /// Whether each iteration's change of the contact forces is sized by a line search
     /// ([`Support::line_search`]): projective dynamics' own steps; not BDF2's, where it left
     /// a body resting on the ground rocking (the `soft_box` at 1/60 s still moved at 0.2 m/s
-    /// after 6 s, against 0.03 m/s without it). Nor where an obstacle stands for a rigid body
-    /// ([`InSolve::notes`]): the impulses the body took no longer matched what the particles
-    /// gave (a soft ball hitting a free box head-on at 1/120 s lost 7.9e-4 of the pair's
-    /// momentum, against under 1e-5 without it; `tests/avian.rs`; not yet understood).
+    /// after 6 s, against 0.03 m/s without it).
     pub(crate) line_search: bool,
     /// ĥ² times the change of the contact forces the line search sizes, and the solve's
     /// answer to it.
@@ -679,8 +676,7 @@ impl Projective {
                 // The last iteration ends on the projection: the step ends with every particle
                 // where its contact holds it.
                 let more = iteration + 1 < iterations;
-                let search = self.line_search && !c.notes();
-                if more && search && self.search_line(s, h2, springs, threads) {
+                if more && self.line_search && self.search_line(s, h2, springs, threads) {
                     let scratch = &mut self.contact_scratch;
                     (self.support).project(c, &mut self.z, &s.x, m, w, scratch, stiffness);
                 }
