@@ -72,6 +72,8 @@ pub struct Support {
     push: Vec<DVec2>,
     /// The last projection's s/ĥ².
     stiffness: f64,
+    /// The free particles' mass, kg: the line search's bound ([`Self::line_search`]).
+    free_mass: f64,
     /// The change of each particle's force in the last projection, where it enters the line
     /// search (zero elsewhere).
     change: Vec<DVec2>,
@@ -88,6 +90,8 @@ impl Support {
     /// force; `h2_over_s` is ĥ²/s.
     pub(crate) fn start(&mut self, s: &State, start: &[DVec2], h2_over_s: f64) {
         let n = start.len();
+        let free = s.mass.iter().zip(&s.inv_mass).filter(|(_, w)| **w != 0.0);
+        self.free_mass = free.map(|(m, _)| m).sum();
         self.force.clear();
         self.force.resize(n, DVec2::ZERO);
         self.gain.clear();
@@ -226,6 +230,8 @@ impl Support {
                 let along = *f / f.length();
                 let away = (x - last[i]).dot(along);
                 if away > 0.0 {
+                    // (`away * rho` rounds otherwise: implicit Euler's and BDF2's results keep
+                    // their bits with the product in this order.)
                     let left = (f.length() - away * gain[i] * stiffness * mass[i]).max(0.0);
                     eased[i] = *f - along * left;
                     *f = along * left;
@@ -248,8 +254,8 @@ impl Support {
     }
 
     /// The step α along the last projection's change δf of the forces, given `answer`, the
-    /// solve's answer w to that change ([`Self::change_to_answer`]), with `mass` and the
-    /// inverse masses `w` of the particles: the forces take α δf instead of δf, and the
+    /// solve's answer w to that change ([`Self::change_to_answer`]), with `mass` the particles'
+    /// masses: the forces take α δf instead of δf, and the
     /// iterate `x` moves where the next solve would put it, from where the last solve left it
     /// (before the projection) by α w. Returns α (1, and nothing moved, where there was no
     /// change).
@@ -264,13 +270,7 @@ impl Support {
     /// 30 J, against 34 J before the line search). A strip two rows deep landing flat takes α = 1/2 of
     /// its lower row's fourfold update (twice that row's mass, the strip's), a box eight rows
     /// high resting on its bottom row α = 2.
-    pub(crate) fn line_search(
-        &mut self,
-        x: &mut [DVec2],
-        mass: &[f64],
-        w: &[f64],
-        answer: &[DVec2],
-    ) -> f64 {
+    pub(crate) fn line_search(&mut self, x: &mut [DVec2], mass: &[f64], answer: &[DVec2]) -> f64 {
         let (mut descent, mut curvature, mut changed) = (0.0, 0.0, 0.0);
         for (i, d) in self.change.iter().enumerate() {
             if *d != DVec2::ZERO {
@@ -283,13 +283,7 @@ impl Support {
         if changed == 0.0 {
             return 1.0;
         }
-        let free: f64 = mass
-            .iter()
-            .zip(w)
-            .filter(|(_, w)| **w != 0.0)
-            .map(|(m, _)| m)
-            .sum();
-        let alpha = (descent / curvature).min(free / changed);
+        let alpha = (descent / curvature).min(self.free_mass / changed);
         let alpha = if alpha.is_finite() && alpha > 0.0 {
             alpha
         } else {
@@ -363,7 +357,7 @@ mod tests {
             })
             .collect();
         let mut x = s.x.clone();
-        let alpha = support.line_search(&mut x, &s.mass, &s.inv_mass, &rigid);
+        let alpha = support.line_search(&mut x, &s.mass, &rigid);
         assert!((alpha - 2.0).abs() < 1e-12, "{alpha}");
         let held: DVec2 = support.force[..n - 1].iter().sum();
         let whole = up * (block * stiffness);
@@ -378,7 +372,7 @@ mod tests {
         // A stiff block: the step held to the free particles' mass over the row's g m.
         pushed(&mut support);
         let stiff: Vec<DVec2> = rhs.iter().map(|r| *r / (0.02 * 40.0)).collect();
-        let alpha = support.line_search(&mut x, &s.mass, &s.inv_mass, &stiff);
+        let alpha = support.line_search(&mut x, &s.mass, &stiff);
         assert!((alpha - 25.0 / 12.0).abs() < 1e-12, "{alpha}");
     }
 }

@@ -716,8 +716,7 @@ impl Projective {
             threads,
         };
         self.global.correct(answer);
-        let (m, w) = (&s.mass[..], &s.inv_mass[..]);
-        (self.support).line_search(&mut self.z, m, w, &self.answer);
+        (self.support).line_search(&mut self.z, &s.mass, &self.answer);
         self.line_searches += 1;
         true
     }
