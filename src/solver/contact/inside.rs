@@ -56,6 +56,9 @@ pub struct InSolve<'a> {
     /// Where the pushes that become velocity note the obstacles' share
     /// ([`Self::keep_out_noting`]).
     reactions: Option<&'a Reactions>,
+    /// Where the step began, when each pair that meets within it is pushed apart along the
+    /// line it met on ([`Self::holding_sides`]).
+    met_from: Option<&'a [DVec2]>,
 }
 
 /// Where the step's moving obstacles stand at each stage of XPBD's substeps
@@ -156,7 +159,27 @@ impl<'a> InSolve<'a> {
             outlines,
             heading,
             reactions: around.reactions,
+            met_from: None,
         })
+    }
+
+    /// This contact with each pair that meets within the step, from `from` where it began,
+    /// pushed apart along the line the two met on rather than their own
+    /// ([`super::pairs::Pairs::push_apart`]): for projective dynamics' and BDF2's
+    /// local/global iterations, whose global step moves a layer by many contact distances at
+    /// once.
+    ///
+    /// Not for the others, measured (`docs/performance-log.md`, 2026-12-07): VBD's and XPBD's
+    /// iterates move vertex by vertex or a substep at a time, the strip folding at 1/60 s kept
+    /// its energy without it (9.2 J and 20.7 J from 8.8 J), and with it the pile under VBD
+    /// came to rest jammed, 20 to 50 J above its resting energy and still stirring; under
+    /// implicit Euler the pile at 1/30 s rose to 313 J (197 J without) and at 1/600 s turned 2
+    /// to 4 of its 96 cells (none without).
+    pub(crate) fn holding_sides<'b>(&'b self, from: &'b [DVec2]) -> InSolve<'b> {
+        InSolve {
+            met_from: Some(from),
+            ..*self
+        }
     }
 
     /// This contact as XPBD's substeps read it, `stage` of a step of `substeps`: stage 0 at
@@ -339,7 +362,7 @@ impl<'a> InSolve<'a> {
     /// particles out of other bodies' outlines, back to the side each started the step on.
     pub(crate) fn separate(&self, x: &mut [DVec2], w: &[f64], scratch: &mut [DVec2]) {
         if let Some((pairs, contact)) = self.pairs {
-            pairs.push_apart(x, w, contact, scratch);
+            pairs.push_apart(x, self.met_from, w, contact, scratch);
         }
         if let Some((outlines, contact)) = self.outlines {
             outlines.push_apart(x, w, contact, None);

@@ -560,7 +560,8 @@ impl Projective {
     /// iterations, left in [`Self::end`]: every particle's, the eliminated ones (inverse mass
     /// 0) at x₀ + dt v₀ (the target's base and velocity are x₀ and v₀ for them). `s.f`
     /// holds the body forces. With `contact`, every global step's iterate is kept out of the
-    /// surfaces and the other particles ([`InSolve`]) before the next local step reads it, and
+    /// surfaces and the other particles ([`InSolve`]; a pair that meets within the step along
+    /// the line it met on, [`InSolve::holding_sides`]) before the next local step reads it, and
     /// under projective dynamics' own steps (not BDF2's) the change of the contact forces is
     /// sized by a line search (`contact::support`).
     pub fn solve(
@@ -669,6 +670,9 @@ impl Projective {
             self.global.correct(global);
             live = live.or_else(|| engage(self));
             if let Some(c) = live {
+                // Each pair that meets within the step is held to the side it met on
+                // ([`InSolve::holding_sides`]).
+                let c = &c.holding_sides(&s.x);
                 let (m, w) = (&s.mass[..], &s.inv_mass[..]);
                 let scratch = &mut self.contact_scratch;
                 let stiffness = scale / h2;
