@@ -619,22 +619,6 @@ fn three_backward_euler_methods_land_a_box_at_a_frames_step() {
     }
 }
 
-/// Steps `app` `steps` times, and fails if a step ends with more energy than the start (to
-/// round-off, 1e-9 of it).
-fn never_gains_energy(app: &mut App, integrator: Integrator, steps: u64) {
-    let g = app.world().resource::<SimParams>().gravity;
-    let start = solver(app).energy(g).total();
-    for n in 1..=steps {
-        step(app, 1);
-        let energy = solver(app).energy(g).total();
-        assert!(
-            energy <= start + 1e-9 * start.abs(),
-            "{integrator}, dt {}: step {n} has {energy} J, more than the start's {start} J",
-            app.world().resource::<SimParams>().dt
-        );
-    }
-}
-
 /// The gas ball of the balance tests (`examples/balloon.rs`'s): 24 particles of 0.05 kg on a
 /// ring of 0.1 m, k = 1e4, nRT = 20, dashpots of 2 N·s/m, μ = 1, its bottom 0.3 m above a
 /// ground without contact settings.

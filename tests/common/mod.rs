@@ -84,6 +84,22 @@ pub fn solver(app: &App) -> &Solver {
     app.world().resource::<Solver>()
 }
 
+/// Steps `app` `steps` times, and fails if a step ends with more energy than the start (to
+/// round-off, 1e-9 of it), naming `what` ran.
+pub fn never_gains_energy(app: &mut App, what: impl std::fmt::Display, steps: u64) {
+    let g = app.world().resource::<sim::SimParams>().gravity;
+    let start = solver(app).energy(g).total();
+    for n in 1..=steps {
+        step(app, 1);
+        let energy = solver(app).energy(g).total();
+        assert!(
+            energy <= start + 1e-9 * start.abs(),
+            "{what}, dt {}: step {n} has {energy} J, more than the start's {start} J",
+            app.world().resource::<sim::SimParams>().dt
+        );
+    }
+}
+
 pub fn pos(app: &App, i: usize) -> DVec2 {
     solver(app).x()[i]
 }
