@@ -106,8 +106,9 @@ fn two_soft_boxes_stack_and_come_to_rest_under_every_integrator() {
 }
 
 /// A strip of cloth (two rows, 96 long) falling on its end onto the ground folds over on
-/// itself; self-collision keeps every pair not joined by a spring at 90 % of 2r or more at
-/// the end of every step, where without it the folds pass through each other.
+/// itself (at least ten pairs not joined by a spring come within 1.2 of 2r); self-collision
+/// keeps every such pair at 90 % of 2r or more at the end of every step, where without it the
+/// folds pass through each other.
 #[test]
 fn a_folding_strip_does_not_pass_through_itself() {
     // The large-step methods at 1/600 s (a fold lands at 3 m/s: 5 mm a step, over the radius
@@ -136,10 +137,12 @@ fn a_folding_strip_does_not_pass_through_itself() {
                 pos(&app, j),
                 solver(&app).solve_stats()
             );
-            touched = touched.max(app.world().resource::<Obstacles>().contacts.pairs);
+            // Pairs within 1.2 of 2r: projective dynamics' solve leaves a fold's pairs resting
+            // just outside 2r, where the contact pass after the step counts none.
+            touched = touched.max(touching_unjoined(solver(&app), 1.2 * 2.0 * r));
         }
         assert!(
-            touched > 10,
+            touched >= 10,
             "{integrator:?}: the strip never folded onto itself ({touched} pairs)"
         );
     }

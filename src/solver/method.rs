@@ -42,7 +42,8 @@ pub enum Integrator {
     Xpbd,
     /// BDF2, second-order backward differentiation, solved by projective dynamics'
     /// local/global iterations with its factor kept (`iterations.bdf2` per step); the air drag
-    /// inside the solve. Second order, dissipative; a backward Euler step starts it.
+    /// inside the solve. Second order, dissipative; a backward Euler step starts it, and is
+    /// taken wherever contact acts.
     #[value(alias = "Bdf2")]
     Bdf2,
     /// Vertex block descent (Chen et al. 2024) on the backward Euler objective: per vertex a

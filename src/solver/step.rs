@@ -91,6 +91,9 @@ pub struct Workspace {
     /// (its start velocity plus a step of its forces' acceleration), for the restitution
     /// after it; empty when the last step's solve did not.
     pub(crate) pre_contact: Vec<DVec2>,
+    /// The velocity jumps the contact pass would make, spread through the bodies after a
+    /// backward Euler step ([`Projective::spread`]).
+    jump: Vec<DVec2>,
     /// Each obstacle's reach for the step's solve ([`contact::reaches`]).
     pub(crate) reach: Vec<f64>,
     /// How long each obstacle has been moving onto the particles ([`Surroundings::leads`]).
@@ -112,6 +115,7 @@ impl Workspace {
             pairs: Pairs::default(),
             outlines: Outlines::default(),
             pre_contact: Vec::new(),
+            jump: Vec::new(),
             reach: Vec::new(),
             lead: Vec::new(),
         }
@@ -140,6 +144,7 @@ impl Workspace {
             xpbd_force_carried: self.xpbd.force_carried(),
             bdf2_iterations_per_step: self.bdf2.iterations_per_step(),
             bdf2_startup_steps: self.bdf2.startup_steps,
+            bdf2_retaken_steps: self.bdf2.retaken_steps,
             bdf2_factorizations: self.bdf2.main.factorizations + self.bdf2.startup.factorizations,
             bdf2_factorization_seconds: self.bdf2.main.factor_seconds
                 + self.bdf2.startup.factor_seconds,
@@ -212,8 +217,11 @@ pub struct SolveStats {
     /// BDF2: local/global iterations per time step.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bdf2_iterations_per_step: Option<f64>,
-    /// BDF2: the backward Euler steps that started (or restarted) its history.
+    /// BDF2: the backward Euler steps that started (or restarted) its history, or that it
+    /// took where contact acts.
     pub bdf2_startup_steps: u64,
+    /// BDF2: its steps solved again as backward Euler steps, since contact acted in them.
+    pub bdf2_retaken_steps: u64,
     /// BDF2: factorisations, of both its matrices.
     pub bdf2_factorizations: u64,
     /// BDF2: their wall time, s.
@@ -541,6 +549,26 @@ pub fn collide(
     let springs = s.springs.len();
     let surfaces = if w.pre_contact.len() == s.x.len() {
         // The solve kept the particles out of the surfaces: the velocities' response alone.
+        // After a backward Euler step the jumps spread through the bodies first
+        // ([`Projective::spread`]), where no obstacle stands for a body that would take
+        // their reaction.
+        let spreads = match integrator {
+            Integrator::ProjectiveDynamics => Some(&mut w.projective),
+            Integrator::Bdf2 if w.bdf2.last_step_backward_euler() => Some(&mut w.bdf2.startup),
+            _ => None,
+        };
+        if let Some(pd) = spreads.filter(|_| around.reactions.is_none()) {
+            let jump = &mut w.jump;
+            jump.clear();
+            jump.extend_from_slice(&s.v);
+            let pre = &w.pre_contact;
+            let (x, w_) = (&s.x, &s.inv_mass);
+            contact::settle(x, jump, pre, w_, dt, gravity, around, threads, springs);
+            for (j, v) in jump.iter_mut().zip(&s.v) {
+                *j -= *v;
+            }
+            pd.spread(s, jump, threads);
+        }
         let pre = &w.pre_contact;
         contact::settle(
             &s.x,

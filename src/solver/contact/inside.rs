@@ -216,6 +216,16 @@ impl<'a> InSolve<'a> {
         }
     }
 
+    /// The same contact, noting no impulses for the obstacles that stand for bodies: for a
+    /// solve that may be taken again (BDF2's, `methods::bdf2`), whose impulses the solve
+    /// taken in its place notes.
+    pub(crate) fn without_notes(&self) -> Self {
+        InSolve {
+            reactions: None,
+            ..*self
+        }
+    }
+
     /// The same contact without the outlines.
     pub(crate) fn without_outlines(&self) -> Self {
         InSolve {

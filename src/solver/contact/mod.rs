@@ -11,7 +11,7 @@
 //! the methods above call it (XPBD pushes pairs apart inside its substeps) and the step runs
 //! its pass.
 
-mod groups;
+pub(crate) mod groups;
 pub(crate) mod inside;
 pub(crate) mod landing;
 pub mod obstacle;

@@ -1,7 +1,8 @@
 //! The contact forces inside the global solves of projective dynamics, BDF2 and implicit Euler:
 //! what each particle's contact gives it, learned over the solve's iterations ([`Support`]),
-//! and, under projective dynamics, one line search that sizes each iteration's change of those
-//! forces by how the whole iterate answers it ([`Support::line_search`]).
+//! and, under projective dynamics and BDF2's backward Euler steps, one line search that sizes
+//! each iteration's change of those forces by how the whole iterate answers it
+//! ([`Support::line_search`]).
 //!
 //! Why the line search: the forces are learned particle by particle, each from its own push
 //! with its own mass as the step, over-relaxed up to [`SUPPORT_GAIN`] where springs tie it to
@@ -52,8 +53,8 @@ const LINE_SEARCH_FROM: f64 = 2.0;
 /// warm-start their impulses), an impact's force launched the particles on the next step (the
 /// pile rose to 893 J under projective dynamics and 11,932 J under BDF2).
 ///
-/// Under projective dynamics, [`Self::line_search`] then resizes each iteration's change of
-/// the forces.
+/// Under projective dynamics and BDF2's backward Euler steps, [`Self::line_search`] then
+/// resizes each iteration's change of the forces.
 #[derive(Debug, Default, Clone)]
 pub struct Support {
     /// Each particle's contact force, N.
@@ -80,6 +81,8 @@ pub struct Support {
     /// How much of each particle's force the last projection eased away: the solve before it
     /// still carried that much ([`Self::note_reactions`]).
     eased: Vec<DVec2>,
+    /// Whether a projection of this step has pushed any particle ([`Self::acted`]).
+    acted: bool,
 }
 
 /// No obstacle holds the particle.
@@ -115,6 +118,7 @@ impl Support {
         self.change.resize(n, DVec2::ZERO);
         self.eased.clear();
         self.eased.resize(n, DVec2::ZERO);
+        self.acted = false;
     }
 
     /// Notes, for the obstacles that stand for bodies, the impulse each gave its particles
@@ -159,6 +163,12 @@ impl Support {
     /// No contact this step: no force.
     pub(crate) fn start_without(&mut self) {
         self.force.clear();
+        self.acted = false;
+    }
+
+    /// Whether the contact acted in this step's solve: some projection pushed a particle.
+    pub(crate) fn acted(&self) -> bool {
+        self.acted
     }
 
     /// Adds each particle's force times `scale` (ĥ² for a residual in force·ĥ², ĥ for an
@@ -199,6 +209,7 @@ impl Support {
             push: pushed,
             change,
             eased,
+            acted,
             ..
         } = self;
         c.project(x, from, w, scratch, |i, x, held| {
@@ -218,6 +229,7 @@ impl Support {
                 obstacle[i] = NO_OBSTACLE;
             }
             pushed[i] = push;
+            *acted |= push != DVec2::ZERO;
             let rho = gain[i] * stiffness * mass[i];
             let f = &mut force[i];
             if push != DVec2::ZERO {

@@ -32,6 +32,7 @@
 //! with v1 = (x1 − x0)/h; damping, ground contact and the position update follow as for
 //! implicit Euler.
 
+use crate::solver::contact::groups::{join, root};
 use crate::solver::contact::inside::InSolve;
 use crate::solver::contact::support::Support;
 use crate::solver::forces::spring::{projection_residual, scatter_pairs};
@@ -143,16 +144,24 @@ pub struct Projective {
     /// The pair push's scratch, when contact runs inside the solve.
     contact_scratch: Vec<DVec2>,
     /// Whether each iteration's change of the contact forces is sized by a line search
-    /// ([`Support::line_search`]): projective dynamics' own steps; not BDF2's, where it left
-    /// a body resting on the ground rocking (the `soft_box` at 1/60 s still moved at 0.2 m/s
-    /// after 6 s, against 0.03 m/s without it).
+    /// ([`Support::line_search`]): projective dynamics' steps and BDF2's backward Euler ones;
+    /// not BDF2's own, where it left a body resting on the ground rocking (the `soft_box` at
+    /// 1/60 s still moved at 0.2 m/s after 6 s, against 0.03 m/s without it), and where BDF2
+    /// takes no step the contact acts in (`methods::bdf2`).
     pub(crate) line_search: bool,
-    /// ĥ² times the change of the contact forces the line search sizes, and the solve's
-    /// answer to it.
+    /// ĥ² times the change of the contact forces the line search sizes (or the impulses
+    /// [`Self::spread`] spreads), and the solve's answer to it.
     change: Vec<DVec2>,
     answer: Vec<DVec2>,
     /// The contact forces, carried from step to step.
     support: Support,
+    /// The last solve's s = 1 + μĥ (1 with the drag after the step): its matrix is
+    /// s M + ĥ² L ([`Self::spread`]).
+    scale: f64,
+    /// [`Self::spread`]'s bodies (a union–find over the free particles joined by springs),
+    /// and its sums at each body's root.
+    bodies: Vec<u32>,
+    body_sums: Vec<BodySums>,
     /// The fill-reducing order to use; `None` picks the cheaper ([`Self::symbolic`]).
     pub(crate) fill_order: Option<FactorOrder>,
     /// The symbolic factorisation of the last matrix, kept while its pattern stays.
@@ -562,8 +571,8 @@ impl Projective {
     /// holds the body forces. With `contact`, every global step's iterate is kept out of the
     /// surfaces and the other particles ([`InSolve`]; a pair that meets within the step along
     /// the line it met on, [`InSolve::holding_sides`]) before the next local step reads it, and
-    /// under projective dynamics' own steps (not BDF2's) the change of the contact forces is
-    /// sized by a line search (`contact::support`).
+    /// where [`Self::line_search`] is set (projective dynamics' steps, BDF2's backward Euler
+    /// ones) the change of the contact forces is sized by a line search (`contact::support`).
     pub fn solve(
         &mut self,
         s: &State,
@@ -583,6 +592,11 @@ impl Projective {
         &self.z
     }
 
+    /// Whether the contact acted in the last solve: some projection pushed a particle.
+    pub(crate) fn contact_acted(&self) -> bool {
+        self.support.acted()
+    }
+
     /// The direction of the contact force holding particle `i` at the end of the last solve
     /// (contact inside it), if one does.
     pub(crate) fn held_along(&self, i: usize) -> Option<DVec2> {
@@ -599,6 +613,7 @@ impl Projective {
         threads: &Threads,
     ) {
         let (h, scale) = (t.h, t.scale());
+        self.scale = scale;
         let h2 = h * h;
         let springs = s.springs.len();
         // z = x̂ + (ĥ/s) v̂ for the free particles, x0 + dt v0 for the eliminated ones (their
@@ -708,8 +723,17 @@ impl Projective {
         if !(self.support).change_to_answer(h2, &mut self.change) {
             return false;
         }
+        self.answer_change(springs, threads);
+        (self.support).line_search(&mut self.z, &s.mass, &self.answer);
+        self.line_searches += 1;
+        true
+    }
+
+    /// The factor's answer to [`Self::change`], A⁻¹ change, into [`Self::answer`]: one more
+    /// solve, for the line search and [`Self::spread`].
+    fn answer_change(&mut self, springs: usize, threads: &Threads) {
         self.answer.clear();
-        self.answer.resize(n, DVec2::ZERO);
+        self.answer.resize(self.change.len(), DVec2::ZERO);
         let answer = GlobalStep {
             factor: &self.factor,
             order: &self.order,
@@ -720,10 +744,92 @@ impl Projective {
             threads,
         };
         self.global.correct(answer);
-        (self.support).line_search(&mut self.z, &s.mass, &self.answer);
-        self.line_searches += 1;
-        true
     }
+}
+
+impl Projective {
+    /// Spreads the velocity jumps `jump` that the contact would give the particles touching a
+    /// surface at the end of a backward Euler step (zero elsewhere) through the bodies they
+    /// belong to, with the last solve's factor, into the state's velocities. Returns whether it
+    /// changed any.
+    ///
+    /// Why: a backward Euler step ends with its mean velocity over the step, (x₁ − x₀)/h: a
+    /// body that lands within it ends with the landing speed in every particle, and the contact
+    /// pass after the step takes it only from those touching. A strip two particles deep
+    /// dropped flat at 1/60 s had its lower row stopped and its upper row still coming at
+    /// 0.78 m/s, 1 cm above it: in the next step the upper row went through, and the strip lay
+    /// turned over (`docs/performance-log.md`, 2026-12-07).
+    ///
+    /// How: the jumps as impulses P = s M Δv on the touching particles; the body's answer
+    /// u = (s M + ĥ² L)⁻¹ P, the velocity change the impulses give it with its springs acting
+    /// over the step (the step's own matrix, so one more solve with the factor); taken α times,
+    /// the exact line search along P of the contact's dual, α = Σ P·Δv / Σ P·u over each body
+    /// (1 for a lone particle, 2 for the strip, whose lower row carries half its mass), at most
+    /// the body's mass over its touching particles'. The contact pass then takes what approach
+    /// is left.
+    pub(crate) fn spread(&mut self, s: &mut State, jump: &[DVec2], threads: &Threads) -> bool {
+        let n = s.v.len();
+        if self.z.len() != n || self.steps == 0 || jump.iter().all(|j| *j == DVec2::ZERO) {
+            return false;
+        }
+        self.change.resize(n, DVec2::ZERO);
+        for (i, p) in self.change.iter_mut().enumerate() {
+            *p = if s.inv_mass[i] != 0.0 {
+                jump[i] * (self.scale * s.mass[i])
+            } else {
+                DVec2::ZERO
+            };
+        }
+        self.answer_change(s.springs.len(), threads);
+        // The matrix joins only particles that springs join (a pinned one is eliminated), so
+        // each body answers its own impulses alone, and takes its own α.
+        let bodies = &mut self.bodies;
+        bodies.clear();
+        bodies.extend(0..n as u32);
+        for sp in &s.springs {
+            if s.inv_mass[sp.a as usize] != 0.0 && s.inv_mass[sp.b as usize] != 0.0 {
+                join(bodies, sp.a, sp.b);
+            }
+        }
+        self.body_sums.clear();
+        self.body_sums.resize(n, BodySums::default());
+        for (i, &jump) in jump.iter().enumerate() {
+            if s.inv_mass[i] == 0.0 {
+                continue;
+            }
+            let sums = &mut self.body_sums[root(bodies, i as u32) as usize];
+            let (p, m) = (self.change[i], s.mass[i]);
+            sums.free += m;
+            if p != DVec2::ZERO {
+                sums.touching += m;
+                sums.along += p.dot(jump);
+                sums.answered += p.dot(self.answer[i]);
+            }
+        }
+        let mut spread = false;
+        for i in 0..n {
+            if s.inv_mass[i] == 0.0 {
+                continue;
+            }
+            let sums = self.body_sums[root(bodies, i as u32) as usize];
+            if sums.along > 0.0 && sums.answered > 0.0 {
+                let alpha = (sums.along / sums.answered).min(sums.free / sums.touching);
+                s.v[i] += self.answer[i] * alpha;
+                spread = true;
+            }
+        }
+        spread
+    }
+}
+
+/// One body's sums in [`Projective::spread`]: its free particles' mass, its touching ones',
+/// Σ P·Δv and Σ P·u.
+#[derive(Debug, Default, Clone, Copy)]
+struct BodySums {
+    free: f64,
+    touching: f64,
+    along: f64,
+    answered: f64,
 }
 
 /// The global step's right-hand side and solution, in the precision of the factor's values.
