@@ -121,7 +121,8 @@ pub fn side_panel(
                 // Stability and accuracy
                 stability_readout(ui, &stability, p.integrator);
                 let particles = solver.particle_count();
-                accuracy_readout(ui, p.integrator, p.dt, particles, p.contact);
+                let touches = p.ground.is_some() || p.contact.is_some();
+                accuracy_readout(ui, p.integrator, p.dt, particles, (p.contact, touches));
                 if p.integrator == Integrator::Xpbd
                     && let Some(line) = crate::readable::xpbd_softness(&solver.solve_stats())
                 {

@@ -72,15 +72,21 @@ fn numerical_damping_note(kept: f64) -> String {
     )
 }
 
-/// The method's order and what the work-precision report measured at this dt.
+/// The method's order and what the work-precision report measured at this dt. `touches`:
+/// the scene has a ground or contact settings, where BDF2 takes a backward Euler step while
+/// contact acts (`solver::methods::bdf2`).
 pub(super) fn accuracy_readout(
     ui: &mut egui::Ui,
     integrator: Integrator,
     dt: f64,
     particles: usize,
-    contact: Option<ContactSettings>,
+    (contact, touches): (Option<ContactSettings>, bool),
 ) {
-    use super::predict::{Prediction, order, predict};
+    use super::predict::{Prediction, predict};
+    let order = |i: Integrator| match i {
+        Integrator::Bdf2 if touches => "2 (1 while contact acts)".to_string(),
+        _ => super::predict::order(i).to_string(),
+    };
     // Large scenes compare best with the cloth, small ones with the oscillator.
     let class = if particles > 100 {
         "cloth32"
