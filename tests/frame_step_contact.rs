@@ -452,18 +452,19 @@ fn projective_dynamics_and_bdf2_slide_round_corners_at_a_frames_step() {
 /// still moved at 0.58 m/s and the strip at 2.9 m/s (docs/performance-log.md, 2026-12-07).
 #[test]
 fn bodies_landing_under_bdf2_at_a_frames_step_come_to_rest() {
-    let stack = "(gravity: (0.0, -9.8), damping: 10.0, ground: Some(0.0), generate: [
-        Grid(cols: 6, rows: 6, min: (0.30, 0.009), max: (0.40, 0.109), mass: 0.25,
-             stiffness: 10000.0, shear: true, pin: None),
-        Grid(cols: 6, rows: 6, min: (0.30, 0.159), max: (0.40, 0.259), mass: 0.25,
-             stiffness: 10000.0, shear: true, pin: None)],
-        contact: Some((radius: 0.009, friction: 0.5, restitution: 0.0, particles: true)))";
-    let stack: Scene = ron::from_str(stack).unwrap();
-    let soft_box = hooke::scene::presets::resolve("soft_box").unwrap().scene;
+    let shipped = hooke::scene::presets::resolve("soft_box").unwrap().scene;
     let cases = [
-        ("stacked boxes", Some(stack.clone()), FRAME),
-        ("stacked boxes", Some(stack), 1.0 / 30.0),
-        ("soft_box", Some(soft_box), 1.0 / 30.0),
+        (
+            "stacked boxes",
+            Some(stacked_soft_boxes(Integrator::Bdf2, FRAME)),
+            FRAME,
+        ),
+        (
+            "stacked boxes",
+            Some(stacked_soft_boxes(Integrator::Bdf2, 1.0 / 30.0)),
+            1.0 / 30.0,
+        ),
+        ("soft_box", Some(shipped), 1.0 / 30.0),
         ("dropped strip", None, 1.0 / 30.0),
     ];
     for (name, scene, dt) in cases {

@@ -4,29 +4,10 @@
 mod common;
 use bevy::math::DVec2;
 use common::*;
-use hooke::scene::{Generator, Pin, Scene};
+use hooke::scene::Scene;
 use hooke::sim::{Integrator, Obstacles};
 
 const G: f64 = 9.8;
-
-/// A soft box: a `n`×`n` grid with shear springs, `size` wide, its lower left corner at `at`.
-fn soft_box(n: usize, size: f64, at: (f64, f64), k: f64) -> Generator {
-    Generator::Grid {
-        cols: n,
-        rows: n,
-        min: at,
-        max: (at.0 + size, at.1 + size),
-        // 0.25 kg a particle: heavier boxes of this stiffness are jelly (1 kg: the lower one
-        // squashed by 37 % under the upper, which slid off it).
-        mass: 0.25,
-        stiffness: k,
-        shear: true,
-        pin: Pin::None,
-        vel: (0.0, 0.0),
-        damping: None,
-        plastic: None,
-    }
-}
 
 /// The step each integrator is used with here: the force-based ones at the app's 1e-4 s
 /// (explicit Euler at 2.5e-5 s: with μ = 10 1/s it needs h ω²/2 < μ, and the boxes' ω² is
@@ -49,22 +30,10 @@ fn usual_dt(integrator: Integrator) -> f64 {
 /// 1e-6 of the potential energy of the drop).
 #[test]
 fn two_soft_boxes_stack_and_come_to_rest_under_every_integrator() {
-    let (n, size, r) = (6, 0.1, 0.009);
+    let (n, size, r) = STACKED_BOXES;
     for integrator in Integrator::ALL {
         let dt = usual_dt(integrator);
-        let mut scene = bare_scene(integrator, dt);
-        scene.gravity = (0.0, -G);
-        scene.ground = Some(0.0);
-        // The app's damping, for every method, so that "at rest within 5 s" asks the same of
-        // them all.
-        scene.damping = 10.0;
-        scene.generate = vec![
-            soft_box(n, size, (0.30, r), 1e4),
-            // Dropped from 0.05 m above the lower box.
-            soft_box(n, size, (0.30, 0.15 + r), 1e4),
-        ];
-        scene.contact = pairs_on(r, 0.5);
-        let mut app = app_with(scene);
+        let mut app = app_with(stacked_soft_boxes(integrator, dt));
         let steps = (5.0 / dt).round() as u64;
         let mut nearest = f64::INFINITY;
         let mut touched = 0;

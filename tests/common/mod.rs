@@ -202,6 +202,45 @@ pub fn folding_strip(integrator: Integrator, dt: f64) -> (Scene, f64) {
     (scene, r)
 }
 
+/// A soft box: a `n`×`n` grid with shear springs, `size` wide, its lower left corner at `at`.
+pub fn soft_box(n: usize, size: f64, at: (f64, f64), k: f64) -> Generator {
+    Generator::Grid {
+        cols: n,
+        rows: n,
+        min: at,
+        max: (at.0 + size, at.1 + size),
+        // 0.25 kg a particle: heavier boxes of this stiffness are jelly (1 kg: the lower one
+        // squashed by 37 % under the upper, which slid off it).
+        mass: 0.25,
+        stiffness: k,
+        shear: true,
+        pin: Pin::None,
+        vel: (0.0, 0.0),
+        damping: None,
+        plastic: None,
+    }
+}
+
+/// [`stacked_soft_boxes`]' boxes: particles a side, width, and the contact radius.
+pub const STACKED_BOXES: (usize, f64, f64) = (6, 0.1, 0.009);
+
+/// Two soft boxes ([`soft_box`], k = 1e4) on the ground, the upper dropped from 0.05 m above
+/// the lower, with the app's damping (so that "at rest" asks the same of every method) and
+/// particle pairs at the boxes' radius with friction 0.5.
+pub fn stacked_soft_boxes(integrator: Integrator, dt: f64) -> Scene {
+    let (n, size, r) = STACKED_BOXES;
+    let mut scene = bare_scene(integrator, dt);
+    scene.gravity = (0.0, -9.8);
+    scene.ground = Some(0.0);
+    scene.damping = 10.0;
+    scene.generate = vec![
+        soft_box(n, size, (0.30, r), 1e4),
+        soft_box(n, size, (0.30, 0.15 + r), 1e4),
+    ];
+    scene.contact = pairs_on(r, 0.5);
+    scene
+}
+
 /// Whether `p` lies inside the closed polygon `ring` (crossing number).
 pub fn inside(ring: &[DVec2], p: DVec2) -> bool {
     let mut odd = false;
