@@ -554,7 +554,7 @@ pub fn collide(
         // their reaction.
         let spreads = match integrator {
             Integrator::ProjectiveDynamics => Some(&mut w.projective),
-            Integrator::Bdf2 if w.bdf2.last_step_backward_euler() => Some(&mut w.bdf2.startup),
+            Integrator::Bdf2 => w.bdf2.backward_euler_solve(),
             _ => None,
         };
         if let Some(pd) = spreads.filter(|_| around.reactions.is_none()) {

@@ -94,10 +94,11 @@ impl Bdf2 {
         self
     }
 
-    /// Whether the last step was a backward Euler step, which ends with its mean velocity
-    /// over the step, (x₁ − x₀)/h.
-    pub(crate) fn last_step_backward_euler(&self) -> bool {
-        self.backward_euler
+    /// The last step's solve when it was a backward Euler step, which ends with its mean
+    /// velocity over the step, (x₁ − x₀)/h: its factor spreads a landing body's stop
+    /// ([`Projective::spread`]).
+    pub(crate) fn backward_euler_solve(&mut self) -> Option<&mut Projective> {
+        self.backward_euler.then_some(&mut self.startup)
     }
 
     /// Mean local/global iterations per step so far, both factors' steps together.
