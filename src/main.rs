@@ -492,6 +492,14 @@ fn run(args: RunArgs) -> ExitCode {
         if let Some(line) = hooke::readable::xpbd_softness(&r.solve) {
             println!("{line}");
         }
+        // Dynamic bodies at a step the coupling was measured unstable at: the panel's line.
+        let method = <Integrator as clap::ValueEnum>::from_str(&r.integrator, true);
+        if let Ok(method) = method
+            && r.bodies.iter().any(|b| !b.fixed)
+            && let Some(line) = hooke::readable::bodies_caution(method, r.dt)
+        {
+            println!("{line}");
+        }
         if r.springs_torn > 0 {
             let torn = plural(r.springs_torn, "spring", "springs");
             println!("{torn} tore");

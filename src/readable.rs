@@ -180,6 +180,25 @@ pub fn list<S: AsRef<str>>(items: &[S]) -> String {
     }
 }
 
+/// The step past which the coupling with avian's dynamic bodies was measured to hold under
+/// every method: the `crates` rest in their net at 1/240 s under all five large-step ones.
+const BODIES_HELD_UP_TO: f64 = 1.0 / 240.0;
+
+/// A caution where the particles push avian's dynamic bodies with a method and step that the
+/// `crates` measured unstable (docs/library.md, the explicit coupling): past 1/240 s only
+/// XPBD, whose substeps exchange the impulses in small steps, held them in their net. The
+/// panel's amber line and `hooke run`'s summary.
+pub fn bodies_caution(integrator: crate::solver::Integrator, dt: f64) -> Option<String> {
+    use crate::solver::Integrator::*;
+    let measured = matches!(integrator, ImplicitEuler | ProjectiveDynamics | Bdf2 | Vbd);
+    (measured && dt > BODIES_HELD_UP_TO * 1.001).then(|| {
+        format!(
+            "Rigid bodies: under {integrator} the coupling held the crates scene in its net \
+             only up to 1/240 s (at 1/60 s the crates left it); XPBD holds them at 1/60 s."
+        )
+    })
+}
+
 /// XPBD's convergence after the last step, when its springs are softer than k says (they
 /// carry under 95 % of its force): the largest constraint error and the share of k's force they
 /// carry. The panel's amber line and `hooke run`'s summary; the energy, counted at k, then

@@ -196,7 +196,8 @@ pub struct RunReport {
     pub steps_per_s: f64,
     /// Spring updates per wall-clock second.
     pub spring_updates_per_s: f64,
-    /// Total energy before the first step, J.
+    /// Total energy before the first step, J: the particles', and with the `avian` feature the
+    /// rigid bodies' (kinetic, turning and in gravity).
     pub energy_start: f64,
     /// Total energy at the end, J.
     pub energy_end: f64,
@@ -375,10 +376,14 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
     // state and the timed steps do not include the first tick's check of every spring.
     sim::check(world)?;
     sim::pack(world)?;
-    let energy_start = world.resource::<Solver>().energy(params.gravity).total();
+    let bodies_start = bodies_energy(world);
+    let energy_start = world.resource::<Solver>().energy(params.gravity).total() + bodies_start;
     let stability = sim::stability::estimate(world.resource::<Solver>(), &params);
 
-    world.insert_resource(sim::watch::EnergyPeak::default());
+    world.insert_resource(sim::watch::EnergyPeak {
+        bodies: bodies_start,
+        ..Default::default()
+    });
     let mut on = OnDevice::default();
     let card = match overrides.device {
         Device::Cpu => None,
@@ -392,10 +397,11 @@ pub fn run(loaded: &LoadedScene, overrides: &Overrides, duration: Duration) -> R
     let peak = *world.resource::<sim::watch::EnergyPeak>();
     let wall_s = (start.elapsed().as_secs_f64() - peak.seconds).max(0.0);
     let bodies = crate::scene::bodies::body_defs(world);
+    let bodies_end = bodies_energy(world);
 
     let solver = world.resource::<Solver>();
     let solve = solver.solve_stats();
-    let energy_end = solver.energy(params.gravity).total();
+    let energy_end = solver.energy(params.gravity).total() + bodies_end;
     let status = *world.resource::<SimStatus>();
     let clock = *world.resource::<SimClock>();
     let blowup_step = match status {
@@ -640,5 +646,18 @@ mod gpu {
         _: impl FnMut(u64),
     ) -> Result<u64, String> {
         match *card {}
+    }
+}
+
+/// The rigid bodies' energy in `world`, J (none without the `avian` feature).
+fn bodies_energy(world: &mut World) -> f64 {
+    #[cfg(feature = "avian")]
+    {
+        crate::sim::avian::bodies_energy(world)
+    }
+    #[cfg(not(feature = "avian"))]
+    {
+        let _ = world;
+        0.0
     }
 }

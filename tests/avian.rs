@@ -755,3 +755,100 @@ fn a_bad_body_is_named() {
     );
     assert!(e.contains("bodies[0].shape") && e.contains("convex"), "{e}");
 }
+
+/// The shipped `crates` under `integrator` at `dt` for 2 s through `hooke run`'s runner: the
+/// run's report and each dynamic body's centre (x, y).
+fn crates_run(integrator: Integrator, dt: f64) -> (hooke::runner::RunReport, Vec<(f32, f32)>) {
+    use hooke::runner::{Duration, Overrides, run};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/crates.ron");
+    let loaded = hooke::scene::LoadedScene::read(&path).unwrap_or_else(|e| panic!("{e}"));
+    let overrides = Overrides {
+        integrator: Some(integrator),
+        dt: Some(dt),
+        ..Default::default()
+    };
+    let mut done = run(&loaded, &overrides, Duration::Time(2.0)).unwrap();
+    let w = done.app.world_mut();
+    let mut bodies: Vec<(Entity, f32, f32)> = w
+        .query::<(Entity, &RigidBody, &Position)>()
+        .iter(w)
+        .filter(|(_, kind, _)| kind.is_dynamic())
+        .map(|(e, _, p)| (e, p.0.x, p.0.y))
+        .collect();
+    bodies.sort_by_key(|b| b.0);
+    (
+        done.report,
+        bodies.into_iter().map(|(_, x, y)| (x, y)).collect(),
+    )
+}
+
+/// A run's total energy is the whole world's: the rigid bodies' too (kinetic, turning and in
+/// gravity). At the start the `crates` hold 0.5 kg at 0.6 m, 0.4 kg at 0.7 m and 0.3 kg at
+/// 0.6 m above the particles' energy: 7.448 J in g = 9.8. Counted without them, a crate thrown
+/// out of its net took its energy out of the figures.
+#[test]
+fn a_runs_energy_counts_the_rigid_bodies() {
+    use hooke::runner::{Duration, run};
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/crates.ron");
+    let loaded = hooke::scene::LoadedScene::read(&path).unwrap_or_else(|e| panic!("{e}"));
+    let done = run(&loaded, &Default::default(), Duration::Steps(0)).unwrap();
+    let particles = done.solver().energy(DVec2::new(0.0, -9.8)).total();
+    let bodies = done.report.energy_start - particles;
+    assert!((bodies - 7.448).abs() < 1e-4, "bodies' energy {bodies} J");
+    assert_eq!(done.report.energy_end, done.report.energy_start);
+}
+
+/// The `crates` at the scene's own step, 1/240 s, under each large-step method: the crates
+/// land in the net and stay in it (their centres between 0.3 and 0.5 m high, over the net's
+/// span), and the whole world's energy, the crates' with the particles', never rises more
+/// than 5 % above its start (the coupling is explicit: each engine meets the other's state of
+/// the step before).
+#[test]
+fn the_crates_rest_in_the_net_under_every_large_step_method() {
+    for integrator in [
+        Integrator::ImplicitEuler,
+        Integrator::ProjectiveDynamics,
+        Integrator::Xpbd,
+        Integrator::Vbd,
+        Integrator::Bdf2,
+    ] {
+        let (report, bodies) = crates_run(integrator, 1.0 / 240.0);
+        assert_eq!(bodies.len(), 3);
+        for (k, &(x, y)) in bodies.iter().enumerate() {
+            assert!(
+                (0.1..0.9).contains(&x) && (0.3..0.5).contains(&y),
+                "{integrator:?}: body {k} at ({x}, {y})"
+            );
+        }
+        assert!(
+            report.energy_max <= 1.05 * report.energy_start,
+            "{integrator:?}: {} J from {} J",
+            report.energy_max,
+            report.energy_start
+        );
+    }
+}
+
+/// The same at a frame's step, 1/60 s: XPBD holds them, the others do not (docs/library.md,
+/// the explicit coupling): projective dynamics, VBD and BDF2 throw crates out of the net,
+/// implicit Euler lets the ball through it.
+#[test]
+#[ignore = "not met: only XPBD holds the crates at 1/60 s (docs/library.md)"]
+fn the_crates_rest_in_the_net_at_a_frames_step() {
+    for integrator in [
+        Integrator::Xpbd,
+        Integrator::ImplicitEuler,
+        Integrator::ProjectiveDynamics,
+        Integrator::Vbd,
+        Integrator::Bdf2,
+    ] {
+        let (report, bodies) = crates_run(integrator, 1.0 / 60.0);
+        for (k, &(x, y)) in bodies.iter().enumerate() {
+            assert!(
+                (0.1..0.9).contains(&x) && (0.3..0.5).contains(&y),
+                "{integrator:?}: body {k} at ({x}, {y})"
+            );
+        }
+        assert!(report.energy_max <= 1.05 * report.energy_start);
+    }
+}

@@ -1302,3 +1302,47 @@ fn a_run_reports_its_rigid_bodies() {
     ]));
     assert!(rope.get("bodies").is_none(), "{rope}");
 }
+
+/// The summary says where the coupling with rigid bodies was measured not to hold: under a
+/// large-step method other than XPBD past 1/240 s (the panel shows the same line), and not at
+/// the scene's own step, nor under XPBD, nor without dynamic bodies.
+#[cfg(feature = "avian")]
+#[test]
+fn a_run_says_where_its_rigid_bodies_are_not_held() {
+    let says = |args: &[&str]| {
+        let o = hooke(args);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        String::from_utf8_lossy(&o.stdout).contains("Rigid bodies: under")
+    };
+    for m in ["implicit-euler", "projective-dynamics", "bdf2", "vbd"] {
+        let run = ["run", "--scene", "crates", "--integrator", m];
+        assert!(
+            says(&[&run[..], &["--dt", "1/60", "--time", "0.1"]].concat()),
+            "{m}"
+        );
+        assert!(
+            !says(&[&run[..], &["--dt", "1/240", "--time", "0.1"]].concat()),
+            "{m}"
+        );
+    }
+    let xpbd = [
+        "run",
+        "--scene",
+        "crates",
+        "--integrator",
+        "xpbd",
+        "--dt",
+        "1/60",
+    ];
+    assert!(!says(&[&xpbd[..], &["--time", "0.1"]].concat()));
+    let pile = [
+        "run",
+        "--scene",
+        "pile",
+        "--integrator",
+        "vbd",
+        "--dt",
+        "1/60",
+    ];
+    assert!(!says(&[&pile[..], &["--time", "0.1"]].concat()));
+}

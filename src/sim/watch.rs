@@ -51,22 +51,41 @@ pub const KEPT: usize = 8;
 /// ```
 #[derive(Resource, Debug, Default, Clone, Copy)]
 pub struct EnergyPeak {
-    /// The largest total energy at the end of a step so far, J (`None` before the first).
+    /// The largest total energy at the end of a step so far, J (`None` before the first): the
+    /// particles' and the rigid bodies' ([`Self::bodies`]).
     pub max: Option<f64>,
     /// Wall time spent evaluating it, s.
     pub seconds: f64,
+    /// The particles' total energy at the end of the last step, J.
+    pub particles: f64,
+    /// The rigid bodies' energy at the end of the last tick, J (zero without any: with the
+    /// `avian` feature, the coupling notes it after avian's step), counted in the total.
+    pub bodies: f64,
 }
 
 impl EnergyPeak {
-    /// Takes the total energy `e` at the end of a step into the peak, and answers whether it
-    /// could: an energy that is not finite is no figure to keep, and the state it came from has
-    /// blown up even where that state is still finite (speeds past 1e154 m/s), so its callers,
-    /// on the CPU and on the card, refuse the step as they refuse a NaN.
+    /// Takes the particles' total energy `e` at the end of a step (with the bodies' last) into
+    /// the peak, and answers whether it could: an energy that is not finite is no figure to
+    /// keep, and the state it came from has blown up even where that state is still finite
+    /// (speeds past 1e154 m/s), so its callers, on the CPU and on the card, refuse the step as
+    /// they refuse a NaN.
     pub fn note(&mut self, e: f64) -> bool {
-        if e.is_finite() {
-            self.max = Some(self.max.map_or(e, |m| m.max(e)));
+        self.particles = e;
+        let total = e + self.bodies;
+        if total.is_finite() {
+            self.max = Some(self.max.map_or(total, |m| m.max(total)));
         }
         e.is_finite()
+    }
+
+    /// Takes the rigid bodies' energy `e` at the end of a tick, with the particles' of the same
+    /// tick, into the peak.
+    pub fn note_bodies(&mut self, e: f64) {
+        self.bodies = e;
+        let total = self.particles + e;
+        if total.is_finite() {
+            self.max = Some(self.max.map_or(total, |m| m.max(total)));
+        }
     }
 }
 

@@ -68,6 +68,7 @@ pub fn side_panel(
         mut attraction,
         scene_list,
         mut card,
+        coupling,
     } = extra;
     let ctx = contexts.ctx_mut()?;
     let mut root = egui::Ui::new(
@@ -128,9 +129,26 @@ pub fn side_panel(
                 {
                     ui.colored_label(AMBER, line);
                 }
+                let pushed = coupling.as_ref().is_some_and(|c| c.dynamic > 0);
+                if let Some(line) =
+                    crate::readable::bodies_caution(p.integrator, p.dt).filter(|_| pushed)
+                {
+                    ui.colored_label(AMBER, line);
+                }
                 ui.separator();
 
-                live_figures(ui, &solver, &clock, &stats, timeline.energy, p.paused);
+                let bodies = coupling
+                    .as_ref()
+                    .filter(|c| c.dynamic > 0)
+                    .map(|c| c.energy);
+                live_figures(
+                    ui,
+                    &solver,
+                    &clock,
+                    &stats,
+                    (timeline.energy, bodies),
+                    p.paused,
+                );
                 ui.separator();
                 egui::CollapsingHeader::new("Plots")
                     .default_open(true)
@@ -259,7 +277,7 @@ fn live_figures(
     solver: &Solver,
     clock: &SimClock,
     stats: &LiveStats,
-    energy: Energy,
+    (energy, bodies): (Energy, Option<f64>),
     paused: bool,
 ) {
     egui::Grid::new("figures").num_columns(2).show(ui, |ui| {
@@ -287,7 +305,8 @@ fn live_figures(
                 fps
             },
         );
-        row("Energy", format!("{} J", number(energy.total(), 6)));
+        let total = energy.total() + bodies.unwrap_or(0.0);
+        row("Energy", format!("{} J", number(total, 6)));
         row("  kinetic", format!("{} J", number(energy.kinetic, 6)));
         row(
             "  gravity",
@@ -301,6 +320,10 @@ fn live_figures(
             // −nRT ln A: its zero is at A = 1 m², so only its changes mean anything.
             row("  gas", format!("{} J", number(energy.potential_gas, 6)));
         }
+        if let Some(e) = bodies {
+            // avian's dynamic bodies: moving, turning and in gravity.
+            row("  rigid bodies", format!("{} J", number(e, 6)));
+        }
     });
 }
 
@@ -312,4 +335,5 @@ pub struct PanelExtras<'w> {
     attraction: ResMut<'w, Attraction>,
     scene_list: Res<'w, SceneList>,
     card: ResMut<'w, crate::sim::gpu::CardStep>,
+    coupling: Option<Res<'w, crate::sim::avian::Coupling>>,
 }
