@@ -1303,9 +1303,10 @@ fn a_run_reports_its_rigid_bodies() {
     assert!(rope.get("bodies").is_none(), "{rope}");
 }
 
-/// The summary says where the coupling with rigid bodies was measured not to hold: under a
-/// large-step method other than XPBD past 1/240 s (the panel shows the same line), and not at
-/// the scene's own step, nor under XPBD, nor without dynamic bodies.
+/// The summary says where the coupling with rigid bodies was measured not to hold: under
+/// implicit Euler past 1/50 s and projective dynamics, BDF2 and VBD past 1/240 s (the panel
+/// shows the same line), and not at the steps that held, nor under XPBD, nor without dynamic
+/// bodies.
 #[cfg(feature = "avian")]
 #[test]
 fn a_run_says_where_its_rigid_bodies_are_not_held() {
@@ -1314,16 +1315,23 @@ fn a_run_says_where_its_rigid_bodies_are_not_held() {
         assert!(o.status.success(), "{args:?}: {}", stderr(&o));
         String::from_utf8_lossy(&o.stdout).contains("Rigid bodies: under")
     };
-    for m in ["implicit-euler", "projective-dynamics", "bdf2", "vbd"] {
-        let run = ["run", "--scene", "crates", "--integrator", m];
-        assert!(
-            says(&[&run[..], &["--dt", "1/60", "--time", "0.1"]].concat()),
-            "{m}"
-        );
-        assert!(
-            !says(&[&run[..], &["--dt", "1/240", "--time", "0.1"]].concat()),
-            "{m}"
-        );
+    for (m, held, not) in [
+        ("implicit-euler", "1/50", "1/30"),
+        ("projective-dynamics", "1/240", "1/60"),
+        ("bdf2", "1/240", "1/60"),
+        ("vbd", "1/240", "1/60"),
+    ] {
+        let run = [
+            "run",
+            "--scene",
+            "crates",
+            "--integrator",
+            m,
+            "--time",
+            "0.1",
+        ];
+        assert!(says(&[&run[..], &["--dt", not]].concat()), "{m}");
+        assert!(!says(&[&run[..], &["--dt", held]].concat()), "{m}");
     }
     let xpbd = [
         "run",

@@ -587,11 +587,7 @@ fn gap(app: &App, rings: [std::ops::Range<usize>; 2]) -> f64 {
 
 /// The shipped balloon scene under `integrator` at `dt`.
 fn balloon(integrator: Integrator, dt: f64) -> App {
-    let text = std::fs::read_to_string("assets/scenes/balloon.ron").unwrap();
-    let mut scene: Scene = ron::from_str(&text).unwrap();
-    scene.integrator = integrator;
-    scene.dt = dt;
-    app_with(scene)
+    shipped("balloon", integrator, dt)
 }
 
 /// The balloons, rings of 24 and 20 particles spaced about six contact diameters apart, under
@@ -729,6 +725,45 @@ fn implicit_euler_keeps_the_piles_energy_at_a_frames_step() {
         "{} of r inside a surface",
         worst.deepest
     );
+}
+
+/// A shipped scene under `integrator` at `dt`.
+fn shipped(name: &str, integrator: Integrator, dt: f64) -> App {
+    let text = std::fs::read_to_string(format!("assets/scenes/{name}.ron")).unwrap();
+    let mut scene: Scene = ron::from_str(&text).unwrap();
+    scene.integrator = integrator;
+    scene.dt = dt;
+    app_with(scene)
+}
+
+/// Implicit Euler sizes its contact forces by projective dynamics' line search: a gas body
+/// landing on a slope, two of them rolling into each other by their outlines, a cloth on a ball
+/// and a box sliding down a slope, each at 1/30 s, never end a step above their start energy
+/// (by 1e-3 of it). Learned particle by particle, the forces that stopped a landing ball's
+/// lowest particles flung it: the `balloon` rose from 117 J to 29,190 J, `cloth_on_ball` from
+/// 13.3 J to 70.7 J and `slope` from 7.96 J to 63.1 J.
+#[test]
+fn implicit_euler_lands_gas_bodies_and_cloths_at_a_frames_step() {
+    let mut failures = vec![];
+    for name in ["balloon", "cloth_on_ball", "slope"] {
+        let dt = 1.0 / 30.0;
+        let mut app = shipped(name, Integrator::ImplicitEuler, dt);
+        let energy = |app: &App| {
+            let gravity = app.world().resource::<SimParams>().gravity;
+            let solver = app.world().resource::<Solver>();
+            solver.state().energy(gravity).total()
+        };
+        let start = energy(&app);
+        let mut most = start;
+        for _ in 0..(6.0 / dt) as usize {
+            step(&mut app, 1);
+            most = most.max(energy(&app));
+        }
+        if most > start * (1.0 + 1e-3) {
+            failures.push(format!("{name}: {most} J from {start} J"));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
 /// Two gas rings of 12 particles, 52 mm apart, dropped with an edge's middle lowest: one

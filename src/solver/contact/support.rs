@@ -61,6 +61,8 @@ pub struct Support {
     force: Vec<DVec2>,
     /// Each particle's over-relaxation g.
     gain: Vec<f64>,
+    /// Whether each particle's change of force enters the line search ([`LINE_SEARCH_FROM`]).
+    searched: Vec<bool>,
     /// The normal of each particle's last contact (a surface's, or a pair push's direction).
     normal: Vec<DVec2>,
     /// Where each particle was after the last projection.
@@ -92,6 +94,17 @@ impl Support {
     /// Readies the buffers for a step of the state's particles starting from `start`, with no
     /// force; `h2_over_s` is ĥ²/s.
     pub(crate) fn start(&mut self, s: &State, start: &[DVec2], h2_over_s: f64) {
+        self.start_relaxed(s, start, h2_over_s, true);
+    }
+
+    /// [`Self::start`] without the over-relaxation (g = 1 for every particle, as implicit
+    /// Euler's Newton steps take it), the line search still where the springs are stiff on the
+    /// step's scale (ĥ² Σk ≥ s m).
+    pub(crate) fn start_unrelaxed(&mut self, s: &State, start: &[DVec2], h2_over_s: f64) {
+        self.start_relaxed(s, start, h2_over_s, false);
+    }
+
+    fn start_relaxed(&mut self, s: &State, start: &[DVec2], h2_over_s: f64, relax: bool) {
         let n = start.len();
         let free = s.mass.iter().zip(&s.inv_mass).filter(|(_, w)| **w != 0.0);
         self.free_mass = free.map(|(m, _)| m).sum();
@@ -105,8 +118,12 @@ impl Support {
             self.gain[sp.a as usize] += sp.k;
             self.gain[sp.b as usize] += sp.k;
         }
-        for (g, &m) in self.gain.iter_mut().zip(&s.mass) {
-            *g = (1.0 + h2_over_s * *g / m).min(SUPPORT_GAIN);
+        self.searched.clear();
+        self.searched.resize(n, false);
+        for ((g, &m), searched) in self.gain.iter_mut().zip(&s.mass).zip(&mut self.searched) {
+            let stiff = 1.0 + h2_over_s * *g / m;
+            *searched = stiff >= LINE_SEARCH_FROM;
+            *g = if relax { stiff.min(SUPPORT_GAIN) } else { 1.0 };
         }
         self.last.clear();
         self.last.extend_from_slice(start);
@@ -210,6 +227,7 @@ impl Support {
             change,
             eased,
             acted,
+            searched,
             ..
         } = self;
         c.project(x, from, w, scratch, |i, x, held| {
@@ -234,7 +252,7 @@ impl Support {
             let f = &mut force[i];
             if push != DVec2::ZERO {
                 *f += push * rho;
-                if gain[i] >= LINE_SEARCH_FROM {
+                if searched[i] {
                     change[i] = push * rho;
                 }
             } else if *f != DVec2::ZERO {

@@ -20,6 +20,10 @@ pub struct Scratch {
     pub(super) contact: Vec<DVec2>,
     /// Implicit Euler: the contact forces, carried from step to step.
     pub(super) support: Support,
+    /// Implicit Euler: the Newton matrix's answer to the contact forces' last change, and the
+    /// solve's Δv kept aside while it is found (the line search, [`Support::line_search`]).
+    pub(super) answer: Vec<DVec2>,
+    pub(super) kept_dv: Vec<DVec2>,
     pub(super) cg: Cg,
     /// The pair passes' thread split (the force pass's and every stage's).
     pub(crate) pairs: SpringBuffers,
