@@ -615,6 +615,29 @@ fn a_saved_scene_loads_back_unchanged() {
     assert_eq!(solver(&again).v(), solver(&app).v());
 }
 
+/// A scene saved from a running pile, its particle pairs colliding, opens again: its resting
+/// contacts sit a little inside 2r, closest under implicit Euler at a frame's step (82 % of 2r
+/// on the contact report's pile), and the check that pairs start apart refused such a file
+/// ("particles 4 and 84 start 0.0100 m apart … closer than 2 × radius = 0.0100 m"). A pair
+/// far inside 2r, as a generator too dense for its radius makes, is still refused.
+#[test]
+fn a_saved_pile_opens_again() {
+    let mut scene = presets::resolve("pile").unwrap().scene;
+    scene.integrator = hooke::sim::Integrator::ImplicitEuler;
+    scene.dt = 1.0 / 60.0;
+    let mut app = app_with(scene);
+    step(&mut app, 180);
+    let saved = snapshot(app.world_mut());
+    let text = to_ron(&saved).unwrap();
+    if let Err(e) = LoadedScene::parse(&text, Path::new("saved.ron")) {
+        panic!("{e}");
+    }
+    let dense = "(contact: Some((radius: 0.05, particles: true)), \
+                 particles: [(pos: (0.0, 0.5)), (pos: (0.07, 0.5))])";
+    let e = LoadedScene::parse(dense, Path::new("dense.ron")).unwrap_err();
+    assert!(e.to_string().contains("at most 0.0350 here"), "{e}");
+}
+
 /// A spring written without `rest` is at rest where the scene draws it: its ends may be
 /// explicit particles or a generator's, and it may carry a material. Without gravity such a
 /// network stays where it is; before, `rest` was required, and a person computed 0.206155 by
