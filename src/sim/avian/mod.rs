@@ -215,71 +215,82 @@ pub(crate) fn coupled(world: &World) -> bool {
     world.contains_resource::<Coupling>() && has_bodies(world)
 }
 
-/// The dynamic rigid bodies' energy, J: each body's kinetic energy, ½M|v|² + ½Iω², and its
-/// potential in avian's gravity, −M g·c (c its centre of mass; zero at the origin, as the
-/// particles' is). With it a run's total energy is the whole world's: the particles' alone
-/// hid a crate thrown out of its net, which took its energy with it.
+/// What a body's energy reads ([`body_energy`]).
+type BodyEnergy<'a> = (
+    &'a RigidBody,
+    &'a Position,
+    &'a Rotation,
+    Option<&'a LinearVelocity>,
+    Option<&'a AngularVelocity>,
+    Option<&'a ComputedCenterOfMass>,
+    Option<&'a ComputedMass>,
+    Option<&'a ComputedAngularInertia>,
+    Option<&'a GravityScale>,
+    (Option<&'a Mass>, Option<&'a Collider>),
+);
+
+/// A dynamic body's energy in gravity `g`, J: its kinetic energy, ½M|v|² + ½Iω², and its
+/// potential, −M g·c (c its centre of mass; zero at the origin, as the particles' is). `None`
+/// for a body that does not move by its own dynamics (static or kinematic).
+fn body_energy(
+    (kind, at, turn, v, w, com, mass, inertia, scale, (given, shape)): BodyEnergy,
+    g: DVec2,
+) -> Option<f64> {
+    if !kind.is_dynamic() {
+        return None;
+    }
+    let mut m = mass.map_or(0.0, |m| m.value() as f64);
+    let mut i = inertia.map_or(0.0, |i| i.value() as f64);
+    if m == 0.0 {
+        // Before avian's first step has computed them: the mass the body was given and its
+        // shape's inertia at that mass.
+        m = given.map_or(0.0, |g| g.0 as f64);
+        if let Some(unit) = shape.map(|c| c.mass_properties(1.0))
+            && unit.mass > 0.0
+        {
+            i = unit.angular_inertia as f64 * m / unit.mass as f64;
+        }
+    }
+    let motion = Motion::of(at, turn, v, w, com);
+    let fall = g * scale.map_or(1.0, |s| s.0 as f64);
+    Some(
+        0.5 * m * motion.linear.length_squared() + 0.5 * i * motion.angular * motion.angular
+            - m * fall.dot(motion.com),
+    )
+}
+
+/// The dynamic rigid bodies' energy, J ([`body_energy`], in avian's gravity). With it a run's
+/// total energy is the whole world's: the particles' alone hid a crate thrown out of its net,
+/// which took its energy with it.
 pub fn bodies_energy(world: &mut World) -> f64 {
     let g = world
         .get_resource::<Gravity>()
         .map_or(DVec2::ZERO, |g| g.0.as_dvec2());
-    let mut bodies = world.query::<(
-        &RigidBody,
-        &Position,
-        &Rotation,
-        Option<&LinearVelocity>,
-        Option<&AngularVelocity>,
-        Option<&ComputedCenterOfMass>,
-        Option<&ComputedMass>,
-        Option<&ComputedAngularInertia>,
-        Option<&GravityScale>,
-        (Option<&Mass>, Option<&Collider>),
-    )>();
-    bodies
-        .iter(world)
-        .filter(|(kind, ..)| kind.is_dynamic())
-        .map(
-            |(_, at, turn, v, w, com, mass, inertia, scale, (given, shape))| {
-                let mut m = mass.map_or(0.0, |m| m.value() as f64);
-                let mut i = inertia.map_or(0.0, |i| i.value() as f64);
-                if m == 0.0 {
-                    // Before avian's first step has computed them: the mass the body was given
-                    // and its shape's inertia at that mass.
-                    m = given.map_or(0.0, |g| g.0 as f64);
-                    if let Some(unit) = shape.map(|c| c.mass_properties(1.0))
-                        && unit.mass > 0.0
-                    {
-                        i = unit.angular_inertia as f64 * m / unit.mass as f64;
-                    }
-                }
-                let motion = Motion::of(at, turn, v, w, com);
-                let fall = g * scale.map_or(1.0, |s| s.0 as f64);
-                0.5 * m * motion.linear.length_squared() + 0.5 * i * motion.angular * motion.angular
-                    - m * fall.dot(motion.com)
-            },
-        )
-        .sum()
+    let mut bodies = world.query::<BodyEnergy>();
+    bodies.iter(world).filter_map(|b| body_energy(b, g)).sum()
 }
 
 /// After avian's step: the dynamic bodies counted and their energy taken, for the panel and
 /// into the run's peak (with the particles' of the same tick) where a run keeps one.
-fn note_bodies_energy(world: &mut World) {
-    let dynamic = world
-        .query::<&RigidBody>()
-        .iter(world)
-        .filter(|k| k.is_dynamic())
-        .count();
-    let e = if dynamic > 0 {
-        bodies_energy(world)
-    } else {
-        0.0
-    };
-    let mut coupling = world.resource_mut::<Coupling>();
+fn note_bodies_energy(
+    bodies: Query<BodyEnergy>,
+    gravity: Option<Res<Gravity>>,
+    mut coupling: ResMut<Coupling>,
+    peak: Option<ResMut<super::watch::EnergyPeak>>,
+) {
+    let g = gravity.map_or(DVec2::ZERO, |g| g.0.as_dvec2());
+    let (mut dynamic, mut e) = (0, 0.0);
+    for b in &bodies {
+        if let Some(energy) = body_energy(b, g) {
+            dynamic += 1;
+            e += energy;
+        }
+    }
     if (coupling.dynamic, coupling.energy) != (dynamic, e) {
         (coupling.dynamic, coupling.energy) = (dynamic, e);
     }
     if dynamic > 0
-        && let Some(mut peak) = world.get_resource_mut::<super::watch::EnergyPeak>()
+        && let Some(mut peak) = peak
     {
         peak.note_bodies(e);
     }

@@ -750,8 +750,7 @@ impl Projective {
 impl Projective {
     /// Spreads the velocity jumps `jump` that the contact would give the particles touching a
     /// surface at the end of a backward Euler step (zero elsewhere) through the bodies they
-    /// belong to, with the last solve's factor, into the state's velocities. Returns whether it
-    /// changed any.
+    /// belong to, with the last solve's factor, into the state's velocities.
     ///
     /// Why: a backward Euler step ends with its mean velocity over the step, (x₁ − x₀)/h: a
     /// body that lands within it ends with the landing speed in every particle, and the contact
@@ -767,10 +766,10 @@ impl Projective {
     /// (1 for a lone particle, 2 for the strip, whose lower row carries half its mass), at most
     /// the body's mass over its touching particles'. The contact pass then takes what approach
     /// is left.
-    pub(crate) fn spread(&mut self, s: &mut State, jump: &[DVec2], threads: &Threads) -> bool {
+    pub(crate) fn spread(&mut self, s: &mut State, jump: &[DVec2], threads: &Threads) {
         let n = s.v.len();
         if self.z.len() != n || self.steps == 0 || jump.iter().all(|j| *j == DVec2::ZERO) {
-            return false;
+            return;
         }
         self.change.resize(n, DVec2::ZERO);
         for (i, p) in self.change.iter_mut().enumerate() {
@@ -806,7 +805,6 @@ impl Projective {
                 sums.answered += p.dot(self.answer[i]);
             }
         }
-        let mut spread = false;
         for i in 0..n {
             if s.inv_mass[i] == 0.0 {
                 continue;
@@ -815,10 +813,8 @@ impl Projective {
             if sums.along > 0.0 && sums.answered > 0.0 {
                 let alpha = (sums.along / sums.answered).min(sums.free / sums.touching);
                 s.v[i] += self.answer[i] * alpha;
-                spread = true;
             }
         }
-        spread
     }
 }
 
