@@ -259,9 +259,10 @@ fn body_energy(
     )
 }
 
-/// The dynamic rigid bodies' energy, J ([`body_energy`], in avian's gravity). With it a run's
-/// total energy is the whole world's: the particles' alone hid a crate thrown out of its net,
-/// which took its energy with it.
+/// The dynamic rigid bodies' energy, J: each body's kinetic energy, ½M|v|² + ½Iω², and its
+/// potential in avian's gravity, −M g·c (c its centre of mass; zero at the origin, as the
+/// particles' is). With it a run's total energy is the whole world's: the particles' alone hid
+/// a crate thrown out of its net, which took its energy with it.
 pub fn bodies_energy(world: &mut World) -> f64 {
     let g = world
         .get_resource::<Gravity>()
