@@ -181,22 +181,30 @@ pub fn list<S: AsRef<str>>(items: &[S]) -> String {
 }
 
 /// A caution where the particles push avian's dynamic bodies with a method and step past the
-/// largest at which the `crates` were measured to rest in their net (docs/library.md, the
-/// explicit coupling): 1/50 s under implicit Euler, whose line search sizes its contact
-/// forces by how the whole body answers them; 1/240 s under projective dynamics, BDF2 and VBD.
-/// XPBD, whose substeps exchange the impulses in small steps, holds them at 1/60 s. The
-/// panel's amber line and `hooke run`'s summary.
+/// largest at which the `crates` were measured to rest in their net (docs/library.md, rigid
+/// bodies at a frame's step): 1/15 s under VBD, which moves the bodies inside its solve; 1/30
+/// s under XPBD, whose substeps exchange the impulses in small steps; 1/50 s under implicit
+/// Euler, whose line search sizes its contact forces by how the whole body answers them;
+/// 1/240 s under projective dynamics and BDF2. The panel's amber line and `hooke run`'s
+/// summary.
 pub fn bodies_caution(integrator: crate::solver::Integrator, dt: f64) -> Option<String> {
     use crate::solver::Integrator::*;
     let (held_up_to, name) = match integrator {
         ImplicitEuler => (1.0 / 50.0, "1/50 s"),
-        ProjectiveDynamics | Bdf2 | Vbd => (1.0 / 240.0, "1/240 s"),
+        ProjectiveDynamics | Bdf2 => (1.0 / 240.0, "1/240 s"),
+        Xpbd => (1.0 / 30.0, "1/30 s"),
+        Vbd => (1.0 / 15.0, "1/15 s"),
         _ => return None,
     };
     (dt > held_up_to * 1.001).then(|| {
+        let best = if integrator == Vbd {
+            "no method held them past it"
+        } else {
+            "VBD, which moves the bodies inside its solve, holds them up to 1/15 s"
+        };
         format!(
             "Rigid bodies: under {integrator} the coupling held the crates scene in its net \
-             only up to {name} (past it the crates left it); XPBD holds them at 1/60 s."
+             only up to {name} (past it the crates left it); {best}."
         )
     })
 }

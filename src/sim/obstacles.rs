@@ -117,6 +117,17 @@ impl Obstacles {
         moved
     }
 
+    /// Gives the obstacles a solve moved among its unknowns the velocities it moved them at
+    /// ([`crate::solver::Workspace::solved_motion`]): (index, linear, angular).
+    pub(crate) fn move_as_solved(&mut self, motion: &[(usize, DVec2, f64)]) {
+        for &(k, linear, angular) in motion {
+            if let Some(o) = self.placed.get_mut(k) {
+                o.pose.velocity = linear;
+                o.pose.angular_velocity = angular;
+            }
+        }
+    }
+
     /// Whether some obstacle that a step moves at its start moves.
     pub(crate) fn any_moves_first(&self) -> bool {
         (0..self.placed.len()).any(|k| self.moves_first(k))

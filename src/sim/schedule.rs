@@ -370,7 +370,7 @@ fn yield_springs(mut solver: ResMut<Solver>, params: Res<SimParams>, mut n: ResM
 fn integrate(
     mut solver: ResMut<Solver>,
     params: Res<SimParams>,
-    obstacles: Res<super::obstacles::Obstacles>,
+    mut obstacles: ResMut<super::obstacles::Obstacles>,
     settings: Res<CgSettings>,
     threads: Res<SolverThreads>,
     mut n: ResMut<PassCounts>,
@@ -400,6 +400,13 @@ fn integrate(
         // the last good state.
         tracing::error!("hooke: {e}");
         s.state.non_finite = true;
+    }
+    if !s.work.solved_motion().is_empty() {
+        // The bodies the solve moved among its unknowns: the contact pass meets them moving
+        // as the solve moved them, and they move after it to where the solve left them.
+        obstacles
+            .bypass_change_detection()
+            .move_as_solved(s.work.solved_motion());
     }
     n.integrate += 1;
 }

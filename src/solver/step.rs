@@ -98,9 +98,22 @@ pub struct Workspace {
     pub(crate) reach: Vec<f64>,
     /// How long each obstacle has been moving onto the particles ([`Surroundings::leads`]).
     pub(crate) lead: Vec<super::contact::obstacle::Lead>,
+    /// Where the last step's solve moved the bodies among its unknowns: each of their
+    /// obstacles' velocities over the step ([`Self::solved_motion`]).
+    solved: Vec<(usize, DVec2, f64)>,
 }
 
 impl Workspace {
+    /// The obstacles whose bodies the last step's solve moved among its unknowns, each as
+    /// (its index, the linear velocity of its centre and the angular velocity that take it
+    /// from where the step began to where the solve left it): what whatever moves the
+    /// obstacles after the step moves them by, so that the contact after the solve meets each
+    /// body moving as the solve moved it, and the body ends where the solve left it. Empty
+    /// when the solve moved none (every method but VBD, and VBD without bodies).
+    pub fn solved_motion(&self) -> &[(usize, DVec2, f64)] {
+        &self.solved
+    }
+
     /// A workspace for a repacked state: new buffers (their sizes and thread split follow the
     /// new arrays), while the large-step methods' precomputation and every counter carry on
     /// (the state's new revision makes them redo the precomputation).
@@ -118,6 +131,7 @@ impl Workspace {
             jump: Vec::new(),
             reach: Vec::new(),
             lead: Vec::new(),
+            solved: Vec::new(),
         }
     }
 
@@ -379,6 +393,7 @@ pub fn integrate(
         )
     });
     let contact = contact.as_ref();
+    w.solved.clear();
     match m.integrator {
         Integrator::ExplicitEuler | Integrator::SymplecticEuler => {
             kick(s, m.integrator, dt, threads)
@@ -404,7 +419,8 @@ pub fn integrate(
                 drag,
                 chebyshev: it.vbd_chebyshev,
             };
-            vbd::step(s, &mut w.vbd, dt, settings, contact, threads)
+            vbd::step(s, &mut w.vbd, dt, settings, contact, threads);
+            w.solved.extend(w.vbd.solved_motion());
         }
     }
     Ok(())

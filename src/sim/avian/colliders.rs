@@ -5,6 +5,7 @@ use super::{Coupling, Motion};
 use crate::sim::obstacles::Obstacles;
 use crate::sim::params::SimParams;
 use crate::sim::solver::Solver;
+use crate::solver::contact::reaction::{mean_decay, mean_gain};
 use crate::solver::{Inertia, Placed, Polygon, Pose, Shape};
 use avian2d::parry::shape::TypedShape;
 use avian2d::prelude::*;
@@ -122,6 +123,8 @@ type BodyState<'a> = (
     Option<&'a GravityScale>,
     Option<&'a ComputedMass>,
     Option<&'a ComputedAngularInertia>,
+    Option<&'a LinearDamping>,
+    Option<&'a AngularDamping>,
 );
 
 /// Adds avian's colliders near the particles to this tick's obstacles.
@@ -136,11 +139,12 @@ pub(super) fn gather(
     colliders: Query<(Entity, &Collider, &Position, &Rotation, Option<&ColliderOf>)>,
     bodies: Query<BodyState>,
 ) {
-    // A dynamic body's mean velocity over avian's coming step without the particles: its
-    // velocity plus gravity over the substeps (avian moves it by v + k g hₛ in substep k of n,
-    // a mean of v + g dt (n + 1)/(2n)). The particles meet it where avian will take it.
-    let n = substeps.0.max(1) as f64;
-    let fall = gravity.0.as_dvec2() * (params.dt * (n + 1.0) / (2.0 * n));
+    // A dynamic body's mean velocity over avian's coming step without the particles: in each
+    // of its n substeps avian damps the velocity by 1/(1 + c hₛ), adds g hₛ and moves by it,
+    // a mean of v ρ + g γ ([`mean_decay`] ρ, [`mean_gain`] γ: v + g dt (n + 1)/(2n)
+    // undamped). The particles meet it where avian will take it.
+    let (n, dt) = (substeps.0.max(1), params.dt);
+    let g = gravity.0.as_dvec2();
     coupling.colliders = 0;
     // The steps note the contacts for the bodies while there are any.
     let feel = !bodies.is_empty();
@@ -195,16 +199,25 @@ pub(super) fn gather(
         // How the body answers the particles' impulses: a dynamic one by its mass, the others
         // as walls.
         let mut inertia = Inertia::default();
-        if let Ok((kind, body_at, body_turn, v, w, c, scale, mass, turning)) = bodies.get(body)
+        if let Ok((kind, body_at, body_turn, v, w, c, scale, mass, turning, linear, angular)) =
+            bodies.get(body)
             && !kind.is_static()
         {
             motion = Motion::of(body_at, body_turn, v, w, c);
             if kind.is_dynamic() {
-                motion.linear += fall * scale.map_or(1.0, |s| s.0 as f64);
+                let linear = linear.map_or(0.0, |d| d.0 as f64);
+                let angular = angular.map_or(0.0, |d| d.0 as f64);
+                let fall = g * (scale.map_or(1.0, |s| s.0 as f64) * mean_gain(linear, n, dt));
+                motion.linear = motion.linear * mean_decay(linear, n, dt) + fall;
+                motion.angular *= mean_decay(angular, n, dt);
                 inertia = Inertia {
                     inverse_mass: mass.map_or(0.0, |m| m.inverse() as f64),
                     inverse_inertia: turning.map_or(0.0, |i| i.inverse() as f64),
                     center_of_mass: motion.com,
+                    body: body.to_bits(),
+                    substeps: n,
+                    linear_damping: linear,
+                    angular_damping: angular,
                 };
             }
         }

@@ -226,6 +226,47 @@ impl<'a> InSolve<'a> {
         }
     }
 
+    /// The same contact with the obstacles standing at `obstacles`, each read with `lead`
+    /// (one per obstacle): for a solve that moves its bodies among its unknowns
+    /// ([`super::solved`]).
+    pub(crate) fn with_obstacles<'b>(
+        &'b self,
+        obstacles: &'b [Placed],
+        lead: &'b [Lead],
+    ) -> InSolve<'b> {
+        InSolve {
+            obstacles,
+            lead,
+            ..*self
+        }
+    }
+
+    /// The obstacles, where this contact sees them.
+    pub(crate) fn obstacles(&self) -> &'a [Placed] {
+        self.obstacles
+    }
+
+    /// Where the contacts' impulses are noted, when some obstacles stand for bodies.
+    pub(crate) fn reactions(&self) -> Option<&'a Reactions> {
+        self.reactions
+    }
+
+    /// How long each obstacle has moved onto the particles when a path is read against it
+    /// (empty: none has).
+    pub(crate) fn leads(&self) -> &'a [Lead] {
+        self.lead
+    }
+
+    /// The contact radius, m.
+    pub(crate) fn radius(&self) -> f64 {
+        self.radius
+    }
+
+    /// The friction coefficient.
+    pub(crate) fn friction(&self) -> f64 {
+        self.friction
+    }
+
     /// The same contact without the outlines.
     pub(crate) fn without_outlines(&self) -> Self {
         InSolve {
@@ -327,22 +368,6 @@ impl<'a> InSolve<'a> {
     /// Whether the contacts' impulses are noted for the obstacles (some stand for bodies).
     pub(crate) fn notes(&self) -> bool {
         self.reactions.is_some()
-    }
-
-    /// The part of an impulse `j` on a particle that a contact of outward normal `n` can
-    /// give: a push along n, never a pull, and friction's share of it, at most μ times the
-    /// push. A solve's balance left short of convergence can say a contact pulled.
-    pub(crate) fn push_only(&self, j: DVec2, n: DVec2) -> DVec2 {
-        let push = j.dot(n).max(0.0);
-        let slide = j - n * j.dot(n);
-        let limit = self.friction * push;
-        let length = slide.length();
-        let slide = if length > limit {
-            slide * (limit / length)
-        } else {
-            slide
-        };
-        n * push + slide
     }
 
     /// Notes that the obstacle `obstacle` gave free particle `i`, at `x` and pushing along

@@ -5,7 +5,8 @@
 //! lists ([`pairs`]); contact inside the large-step methods' solves (`inside`), the contact
 //! forces their global solves learn and the step each body takes along them (`support`), and
 //! where VBD's descent starts a body landing on a surface (`landing`); and the impulses the
-//! obstacles take back ([`reaction`]).
+//! obstacles take back ([`reaction`]), or the bodies a solve moves among its unknowns
+//! (`solved`).
 //!
 //! It reads the state (`solver::state`), the sweep's motion (`solver::forces`) and the threads;
 //! the methods above call it (XPBD pushes pairs apart inside its substeps) and the step runs
@@ -19,6 +20,7 @@ pub mod outline;
 pub mod pairs;
 mod pass;
 pub mod reaction;
+pub(crate) mod solved;
 pub(crate) mod support;
 
 pub(crate) use pass::moves_first;

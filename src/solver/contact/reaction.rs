@@ -59,6 +59,17 @@ pub struct Inertia {
     pub inverse_inertia: f64,
     /// The centre of mass, world, m.
     pub center_of_mass: DVec2,
+    /// Which body: the obstacles of one body (a body of several colliders) share it, so that a
+    /// solve that moves the body moves them together (VBD: `solver::contact::solved`).
+    pub body: u64,
+    /// How its engine moves it over a step: in `substeps` substeps (0 counts as 1), each
+    /// damping its velocity by 1/(1 + c hₛ) with c [`Self::linear_damping`] and its angular
+    /// velocity with c [`Self::angular_damping`].
+    pub substeps: u32,
+    /// The damping of its velocity, 1/s (avian's `LinearDamping`; 0: undamped).
+    pub linear_damping: f64,
+    /// The damping of its angular velocity, 1/s (avian's `AngularDamping`; 0: undamped).
+    pub angular_damping: f64,
 }
 
 impl Inertia {
@@ -69,9 +80,42 @@ impl Inertia {
         self.inverse_mass + arm * arm * self.inverse_inertia
     }
 
+    /// The share of a change of velocity at a step's start that the engine carries into the
+    /// body's move over a step of `dt`, (linear, angular): 1 undamped ([`mean_decay`]).
+    pub fn kept(&self, dt: f64) -> (f64, f64) {
+        let n = self.substeps.max(1);
+        (
+            mean_decay(self.linear_damping, n, dt),
+            mean_decay(self.angular_damping, n, dt),
+        )
+    }
+
     fn is_wall(&self) -> bool {
         self.inverse_mass == 0.0 && self.inverse_inertia == 0.0
     }
+}
+
+/// The mean over a step of `dt` in `substeps` substeps of the decay of a velocity that each
+/// substep damps by r = 1/(1 + c hₛ) before moving by it: (1/n) Σₖ₌₁ⁿ rᵏ (1 for c = 0).
+pub fn mean_decay(damping: f64, substeps: u32, dt: f64) -> f64 {
+    let n = substeps.max(1);
+    let r = 1.0 / (1.0 + damping * dt / n as f64);
+    (1..=n).map(|k| r.powi(k as i32)).sum::<f64>() / n as f64
+}
+
+/// The mean velocity over a step of `dt` in `substeps` substeps that a constant acceleration of
+/// 1 gives a body starting at rest, each substep damping by r = 1/(1 + c hₛ) and then adding
+/// hₛ: hₛ (1/n) Σₖ₌₁ⁿ Σⱼ₌₀ᵏ⁻¹ rʲ (dt (n + 1)/(2n) for c = 0).
+pub fn mean_gain(damping: f64, substeps: u32, dt: f64) -> f64 {
+    let n = substeps.max(1);
+    let hs = dt / n as f64;
+    let r = 1.0 / (1.0 + damping * hs);
+    let (mut v, mut sum) = (0.0, 0.0);
+    for _ in 0..n {
+        v = v * r + hs;
+        sum += v;
+    }
+    sum / n as f64
 }
 
 /// One contact's impulse on its obstacle.
@@ -105,6 +149,9 @@ impl Note {
 #[derive(Debug, Default)]
 pub struct Reactions {
     notes: Mutex<Vec<Note>>,
+    /// Impulses a solve gave its bodies whole (obstacle, impulse, moment about the origin),
+    /// which no share cuts: the solve moved the body with the particles ([`super::solved`]).
+    given: Mutex<Vec<(u32, DVec2, f64)>>,
     summed: Vec<Reaction>,
     /// Each obstacle's body, by the obstacle's index (none past the end: walls).
     inertia: Vec<Inertia>,
@@ -143,6 +190,19 @@ impl Reactions {
         notes.push(note);
     }
 
+    /// Gives obstacle `obstacle`'s body the impulse `impulse` (N·s, at its centre of mass
+    /// `center`) and the angular impulse `angular` (N·m·s about it), whole: what a solve that
+    /// moved the body among its unknowns found the particles gave it ([`super::solved`]).
+    pub(crate) fn give(&self, obstacle: usize, center: DVec2, impulse: DVec2, angular: f64) {
+        let mut given = self.given.lock().unwrap_or_else(|e| e.into_inner());
+        given.push((obstacle as u32, impulse, center.perp_dot(impulse) + angular));
+    }
+
+    /// The body behind obstacle `obstacle`, if it is one that moves (not a wall).
+    pub(crate) fn body(&self, obstacle: usize) -> Option<Inertia> {
+        self.inertia.get(obstacle).copied().filter(|b| !b.is_wall())
+    }
+
     /// Forgets the bodies: every obstacle is a wall until [`Self::set_inertia`] says otherwise.
     pub fn clear_inertia(&mut self) {
         self.inertia.clear();
@@ -170,6 +230,15 @@ impl Reactions {
     pub fn close_step(&mut self, obstacles: usize, v: &mut [DVec2], w: &[f64]) {
         if self.summed.len() != obstacles {
             self.summed.resize(obstacles, Reaction::default());
+        }
+        let given = self.given.get_mut().unwrap_or_else(|e| e.into_inner());
+        given.sort_unstable_by_key(|(o, j, m)| (*o, j.x.to_bits(), j.y.to_bits(), m.to_bits()));
+        for (o, impulse, moment) in given.drain(..) {
+            if let Some(r) = self.summed.get_mut(o as usize) {
+                r.impulse += impulse;
+                r.moment += moment;
+                r.contacts += 1;
+            }
         }
         let notes = self.notes.get_mut().unwrap_or_else(|e| e.into_inner());
         if notes.is_empty() {

@@ -35,6 +35,13 @@
 //! spectral radius (`iterations.vbd_chebyshev`, 0 = off): after iteration k ≥ 2,
 //! x ← ω_k (x − x_{k−2}) + x_{k−2}, ω₂ = 2/(2 − ρ²), ω_k = 4/(4 − ρ² ω_{k−1}).
 //!
+//! Rigid bodies of another engine (the obstacles whose [`crate::solver::Reactions`] give them a
+//! mass) are blocks of the descent too: after each sweep each takes Newton steps on its inertia
+//! plus its contacts with the particles held, and the next sweep keeps the particles out of it
+//! where it then stands (`contact::solved`). The body starts where the step began; the step ends
+//! on a sweep, with the particles out of the body where the solve left it, and its engine is
+//! given the impulse that takes it there.
+//!
 //! Nothing is factorised: the colouring (linear in the springs) is all a change of the spring
 //! graph or the pins costs. Threads: the pool's threads work through each colour's vertices in
 //! shares as one team ([`crate::solver::threads::team`]), meeting at a barrier after each colour, so the sweep is
@@ -42,6 +49,7 @@
 
 use crate::solver::contact::inside::InSolve;
 use crate::solver::contact::landing::Landing;
+use crate::solver::contact::solved::SolvedBodies;
 use crate::solver::state::State;
 use crate::solver::threads::Threads;
 use crate::solver::threads::team::Shared;
@@ -66,9 +74,12 @@ pub struct Vbd {
     before: Vec<DVec2>,
     previous: Vec<DVec2>,
     gas: Vec<DVec2>,
-    /// Each vertex's last contact force from a body, and the body's obstacle (when noted).
-    held: Vec<DVec2>,
-    held_by: Vec<u32>,
+    /// Each vertex's last unconstrained block step and its block's Hessian (h00, h01, h11),
+    /// when bodies move among the unknowns.
+    free: Vec<DVec2>,
+    blocks: Vec<[f64; 3]>,
+    /// The bodies the particles touch, moved among the unknowns.
+    bodies: SolvedBodies,
     /// Each vertex's acceleration over the last step as its solve found it (before the passes
     /// after the step: the air damping, contact), and the edits it was under (for the adaptive
     /// initialisation).
@@ -92,6 +103,12 @@ impl Vbd {
         self.last_edits = None;
         self.revision = None;
         self
+    }
+
+    /// The obstacles whose bodies the last step moved among its unknowns, with their
+    /// velocities over the step ([`crate::solver::Workspace::solved_motion`]).
+    pub(crate) fn solved_motion(&self) -> impl Iterator<Item = (usize, DVec2, f64)> + '_ {
+        self.bodies.motion()
     }
 
     /// Colours of the vertex graph (0 before the first step).
@@ -192,9 +209,6 @@ pub struct Settings {
     pub chebyshev: f64,
 }
 
-/// No body's obstacle holds the vertex.
-const NO_BODY: u32 = u32::MAX;
-
 /// What one vertex's block step reads.
 #[derive(Clone, Copy)]
 struct Block<'a> {
@@ -206,9 +220,9 @@ struct Block<'a> {
     dashpot: &'a [f64],
     /// Contact inside the solve: each vertex step's result is kept out of the surfaces.
     contact: Option<&'a InSolve<'a>>,
-    /// When the contacts are noted for bodies: each vertex's last contact force H δ (its
-    /// block's Hessian times the push) and the obstacle that gave it ([`NO_BODY`]: none).
-    held: Option<(Shared<DVec2>, Shared<u32>)>,
+    /// When bodies move among the unknowns: each vertex's unconstrained step and its block's
+    /// Hessian, for the bodies' steps.
+    free: Option<(Shared<DVec2>, Shared<[f64; 3]>)>,
     /// s/h² and 1/h.
     inertia: f64,
     inv_h: f64,
@@ -272,19 +286,13 @@ impl Block<'_> {
             // Projected block descent: the vertex's constraints (the obstacles, the ground)
             // are its own, so holding each step's result to them descends on the constrained
             // objective.
-            let free = end;
-            let touched = c.keep_out(i, &mut end, self.s.x[i]);
-            if let Some((force, by)) = self.held {
-                let d = end - free;
-                let push = DVec2::new(h00 * d.x + h01 * d.y, h01 * d.x + h11 * d.y);
-                let o = touched
-                    .and_then(|t| t.obstacle)
-                    .map_or(NO_BODY, |o| o as u32);
-                // SAFETY: the caller's: vertex i is this thread's alone now.
-                unsafe {
-                    force.set(i, if o == NO_BODY { DVec2::ZERO } else { push });
-                    by.set(i, o);
-                }
+            c.keep_out(i, &mut end, self.s.x[i]);
+        }
+        if let Some((free, blocks)) = self.free {
+            // SAFETY: the caller's: vertex i is this thread's alone now.
+            unsafe {
+                free.set(i, xi + step);
+                blocks.set(i, [h00, h01, h11]);
             }
         }
         // SAFETY: the caller's.
@@ -390,14 +398,17 @@ pub fn step(
     vb.before.resize(if chebyshev { n } else { 0 }, DVec2::ZERO);
     vb.previous
         .resize(if chebyshev { n } else { 0 }, DVec2::ZERO);
-    // Each vertex's last contact force, when the contacts are noted for bodies.
-    let notes = contact.is_some_and(|c| c.notes());
-    let held_len = if notes { n } else { 0 };
-    vb.held.clear();
-    vb.held.resize(held_len, DVec2::ZERO);
-    vb.held_by.clear();
-    vb.held_by.resize(held_len, NO_BODY);
-    let held = notes.then(|| (Shared::new(&mut vb.held), Shared::new(&mut vb.held_by)));
+    // Each vertex's last contact with a body, and the bodies among the unknowns, when the
+    // contacts are noted for bodies.
+    vb.bodies.clear();
+    let solved = contact.is_some_and(|c| vb.bodies.ready(c, dt));
+    let free_len = if solved { n } else { 0 };
+    vb.free.clear();
+    vb.free.resize(free_len, DVec2::ZERO);
+    vb.blocks.clear();
+    vb.blocks.resize(free_len, [0.0; 3]);
+    let free = solved.then(|| (Shared::new(&mut vb.free), Shared::new(&mut vb.blocks)));
+    let surface = contact.map_or((0.0, 0.0), |c| (c.radius(), c.friction()));
     let block = Block {
         s,
         vbd_adj_start: &vb.adjacency_start,
@@ -406,7 +417,7 @@ pub fn step(
         gas: None,
         dashpot: s.materials.dashpot(),
         contact,
-        held,
+        free,
         inertia: scale / h2,
         inv_h: 1.0 / dt,
     };
@@ -418,6 +429,7 @@ pub fn step(
     let mut pair_scratch = vec![DVec2::ZERO; contact.map_or(0, |c| c.pair_scratch())];
     let pair_len = pair_scratch.len();
     let pair_scratch = Shared::new(&mut pair_scratch);
+    let bodies = Shared::new(std::slice::from_mut(&mut vb.bodies));
     // The pool's threads as one team for the whole step (a fork and a join per iteration
     // cost as much as an iteration of a 32² cloth).
     threads.team(springs, |team| {
@@ -433,15 +445,40 @@ pub fn step(
                 }
                 team.wait();
             }
+            if let Some((free, blocks)) = free.filter(|_| k > 0) {
+                // The bodies' steps with the particles held, on one member, from the last
+                // sweep's blocks; the sweep that follows keeps the particles out of the bodies
+                // where they then stand, so that the step ends with the two agreeing (a body
+                // moved after the last sweep ended inside the particles, and pushed its net a
+                // little further down each step: a box in a net at 1/30 s sagged 13 cm below
+                // its rest).
+                if !team.share(0..1).is_empty() {
+                    // SAFETY: the other members wait at the barrier below, touching nothing;
+                    // the blocks were written before the barrier above.
+                    let (bodies, free, blocks) =
+                        unsafe { (&mut bodies.part(0..1)[0], free.read(), blocks.read()) };
+                    bodies.step(free, blocks, x0, w, surface);
+                }
+                team.wait();
+            }
             if chebyshev {
                 // SAFETY: this member's particles.
                 let (x, previous) = unsafe { (x.part(mine.clone()), previous.part(mine.clone())) };
                 previous.copy_from_slice(x);
                 team.wait();
             }
+            // The obstacles where the bodies now stand.
+            // SAFETY: written by one member between the barriers after the sweep, read only
+            // now.
+            let moved = solved.then(|| unsafe { &bodies.read()[0] });
+            let here = contact.map(|c| match moved {
+                Some(b) => b.seen_by(c),
+                None => *c,
+            });
             let block = Block {
                 // SAFETY: written before the barrier above, read only now.
                 gas: has_gas.then(|| unsafe { gas.read() }),
+                contact: here.as_ref(),
                 ..block
             };
             for colour in starts.windows(2) {
@@ -496,24 +533,9 @@ pub fn step(
             }
         }
     });
-    if let Some(c) = contact.filter(|c| c.notes()) {
-        // What the obstacles that stand for bodies gave their vertices in the last sweep: the
-        // force that held each at its push, H δ, over h/s (at convergence the vertex's whole
-        // balance; short of it, what the contact did, never a pull).
-        for i in 0..n {
-            let o = vb.held_by[i];
-            if o != NO_BODY && s.inv_mass[i] != 0.0 {
-                let j = vb.held[i] * h_over_s;
-                let normal = j.normalize_or_zero();
-                c.note(
-                    o as usize,
-                    i,
-                    (vb.x[i], normal),
-                    c.push_only(j, normal),
-                    None,
-                );
-            }
-        }
+    if let Some(c) = contact.filter(|_| solved) {
+        // The bodies are given what takes them where the descent left them.
+        vb.bodies.give(c);
     }
     let inv_h = 1.0 / dt;
     let data = (
