@@ -376,6 +376,30 @@ fn share(notes: &mut [Note], body: Inertia, v: &mut [DVec2], w: &[f64]) {
 mod tests {
     use super::*;
 
+    /// The mean decay and gain are a damped body's mean velocity over a step as avian's
+    /// substeps move it (each damps by 1/(1 + c hₛ), adds the acceleration's hₛ, then moves by
+    /// the velocity): from 1 m/s without acceleration, and from rest under 1 m/s²; undamped,
+    /// 1 and dt (n + 1)/(2n).
+    #[test]
+    fn the_mean_decay_and_gain_are_the_substeps_mean_velocity() {
+        let dt = 1.0 / 30.0;
+        for (damping, n) in [(0.0, 6), (2.0, 6), (5.0, 1), (0.7, 12)] {
+            let hs = dt / n as f64;
+            let mean = |mut v: f64, a: f64| {
+                let mut x = 0.0;
+                for _ in 0..n {
+                    v = v / (1.0 + damping * hs) + a * hs;
+                    x += v * hs;
+                }
+                x / dt
+            };
+            assert!((mean_decay(damping, n, dt) - mean(1.0, 0.0)).abs() < 1e-15);
+            assert!((mean_gain(damping, n, dt) - mean(0.0, 1.0)).abs() < 1e-15);
+        }
+        assert_eq!(mean_decay(0.0, 6, dt), 1.0);
+        assert!((mean_gain(0.0, 6, dt) - dt * 7.0 / 12.0).abs() < 1e-15);
+    }
+
     /// The sum is the same bits whatever order the notes came in, and the moment about a point
     /// is the moment of the impulses about it.
     #[test]
