@@ -58,6 +58,19 @@ fn run(app: &mut App, frames: usize) {
     }
 }
 
+/// A dynamic box of `size` (m) and `mass` (kg) at `at`, turned by `turn` rad.
+fn dynamic_box(world: &mut World, size: Vec2, mass: f32, at: Vec2, turn: f32) -> Entity {
+    world
+        .spawn((
+            RigidBody::Dynamic,
+            Collider::rectangle(size.x, size.y),
+            Mass(mass),
+            Position(at),
+            Rotation::radians(turn),
+        ))
+        .id()
+}
+
 /// A soft ball of `mass` kg: a centre and a ring of 16 particles, rim and spokes with
 /// dashpots, moving at `v`.
 fn soft_ball(world: &mut World, centre: DVec2, radius: f64, mass: f64, v: DVec2) -> Vec<Entity> {
@@ -231,15 +244,8 @@ fn a_box_corner_pushes_a_ring_by_its_outline() {
         }
         let w = app.world_mut();
         gas_ring(w, DVec2::ZERO, 1.0, DVec2::new(1.0, 0.0));
-        let body = w
-            .spawn((
-                RigidBody::Dynamic,
-                Collider::rectangle(0.1, 0.1),
-                Mass(1.0),
-                Position(Vec2::new(0.25, 0.0)),
-                Rotation::degrees(45.0),
-            ))
-            .id();
+        let (size, at) = (Vec2::splat(0.1), Vec2::new(0.25, 0.0));
+        let body = dynamic_box(w, size, 1.0, at, 45f32.to_radians());
         run(&mut app, 2);
         let before = particle_momentum(&app) + body_velocity(&app, body);
         let (mut touched, mut inside) = (false, 0usize);
@@ -880,14 +886,7 @@ fn box_in_a_net_under_vbd(dt: f64) -> (f32, f32) {
     app.world_mut().resource_mut::<SimParams>().damping = 1.0;
     let w = app.world_mut();
     trampoline(w, 41, 0.5, 0.01, 2e4);
-    let body = w
-        .spawn((
-            RigidBody::Dynamic,
-            Collider::rectangle(0.12, 0.08),
-            Mass(0.5),
-            Position(Vec2::new(0.5, 0.6)),
-        ))
-        .id();
+    let body = dynamic_box(w, Vec2::new(0.12, 0.08), 0.5, Vec2::new(0.5, 0.6), 0.0);
     run(&mut app, (10.0 / dt).round() as usize);
     let w = app.world();
     let (at, turn) = (
@@ -940,15 +939,7 @@ fn vbd_and_avian_agree_where_each_body_ends_its_step() {
     }
     let w = app.world_mut();
     trampoline(w, 41, 0.5, 0.01, 2e4);
-    let body = w
-        .spawn((
-            RigidBody::Dynamic,
-            Collider::rectangle(0.12, 0.08),
-            Mass(0.5),
-            Position(Vec2::new(0.45, 0.6)),
-            Rotation::radians(0.3),
-        ))
-        .id();
+    let body = dynamic_box(w, Vec2::new(0.12, 0.08), 0.5, Vec2::new(0.45, 0.6), 0.3);
     let (mut worst, mut worst_turn, mut touched) = (0.0f64, 0.0f64, 0);
     for _ in 0..90 {
         app.update();
