@@ -1,7 +1,7 @@
 //! avian's colliders as hooke's obstacles: each shape in hooke's terms, and the colliders near
 //! the particles gathered for the tick.
 
-use super::{Coupling, Motion};
+use super::{BodyRead, Coupling, Motion};
 use crate::sim::obstacles::Obstacles;
 use crate::sim::params::SimParams;
 use crate::sim::solver::Solver;
@@ -112,21 +112,6 @@ fn particle_bounds(solver: &Solver, params: &SimParams) -> Option<(DVec2, DVec2)
     (lo.is_finite() && hi.is_finite()).then_some((lo - grow, hi + grow))
 }
 
-/// What the gather reads of a collider's body.
-type BodyState<'a> = (
-    &'a RigidBody,
-    &'a Position,
-    &'a Rotation,
-    Option<&'a LinearVelocity>,
-    Option<&'a AngularVelocity>,
-    Option<&'a ComputedCenterOfMass>,
-    Option<&'a GravityScale>,
-    Option<&'a ComputedMass>,
-    Option<&'a ComputedAngularInertia>,
-    Option<&'a LinearDamping>,
-    Option<&'a AngularDamping>,
-);
-
 /// Adds avian's colliders near the particles to this tick's obstacles.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn gather(
@@ -137,7 +122,7 @@ pub(super) fn gather(
     gravity: Res<Gravity>,
     substeps: Res<SubstepCount>,
     colliders: Query<(Entity, &Collider, &Position, &Rotation, Option<&ColliderOf>)>,
-    bodies: Query<BodyState>,
+    bodies: Query<BodyRead>,
 ) {
     // A dynamic body's mean velocity over avian's coming step without the particles: in each
     // of its n substeps avian damps the velocity by 1/(1 + c hₛ), adds g hₛ and moves by it,
@@ -199,11 +184,11 @@ pub(super) fn gather(
         // How the body answers the particles' impulses: a dynamic one by its mass, the others
         // as walls.
         let mut inertia = Inertia::default();
-        if let Ok((kind, body_at, body_turn, v, w, c, scale, mass, turning, linear, angular)) =
+        if let Ok((kind, body_motion, (mass, turning, scale), (linear, angular), _)) =
             bodies.get(body)
             && !kind.is_static()
         {
-            motion = Motion::of(body_at, body_turn, v, w, c);
+            motion = Motion::of(body_motion);
             if kind.is_dynamic() {
                 let linear = linear.map_or(0.0, |d| d.0 as f64);
                 let angular = angular.map_or(0.0, |d| d.0 as f64);

@@ -2,7 +2,7 @@
 //! pulls, onto the dynamic bodies through avian's [`Forces`]; and the attached particles put at
 //! their bodies' points before the step.
 
-use super::{Coupling, Motion, centre_of_mass};
+use super::{BodyMotion, Coupling, Motion, centre_of_mass};
 use crate::sim::components::{Kinematic, Position as ParticlePosition, SolverIndex, Velocity};
 use crate::sim::obstacles::Obstacles;
 use crate::sim::params::SimParams;
@@ -38,25 +38,18 @@ pub struct Attachment {
     pub anchor: Vec2,
 }
 
-type BodyMotion<'a> = (
-    &'a Position,
-    &'a Rotation,
-    Option<&'a LinearVelocity>,
-    Option<&'a AngularVelocity>,
-    Option<&'a ComputedCenterOfMass>,
-);
-
 /// Puts each attached particle at its body's point, moving with it.
 pub(super) fn follow(
     mut particles: Query<(&Attachment, &mut ParticlePosition, &mut Velocity)>,
     bodies: Query<BodyMotion>,
 ) {
     for (a, mut x, mut u) in &mut particles {
-        let Ok((at, turn, v, w, com)) = bodies.get(a.body) else {
+        let Ok(body) = bodies.get(a.body) else {
             continue;
         };
+        let (at, turn, ..) = body;
         let p = (at.0 + *turn * a.anchor).as_dvec2();
-        let pv = Motion::of(at, turn, v, w, com).velocity_at(p);
+        let pv = Motion::of(body).velocity_at(p);
         if x.0 != p {
             x.0 = p;
         }

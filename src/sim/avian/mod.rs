@@ -133,16 +133,36 @@ struct Motion {
     angular: f64,
 }
 
+/// What hooke reads of a rigid body's motion: where it is, how it is turned, its velocities
+/// and its centre of mass.
+type BodyMotion<'a> = (
+    &'a Position,
+    &'a Rotation,
+    Option<&'a LinearVelocity>,
+    Option<&'a AngularVelocity>,
+    Option<&'a ComputedCenterOfMass>,
+);
+
+/// What hooke reads of a rigid body, for the colliders' gather and the bodies' energy: its
+/// kind and motion; its mass, moment of inertia and gravity scale; its damping; and the mass
+/// and shape it was given (which stand for the first two before avian's first step computes
+/// them).
+type BodyRead<'a> = (
+    &'a RigidBody,
+    BodyMotion<'a>,
+    (
+        Option<&'a ComputedMass>,
+        Option<&'a ComputedAngularInertia>,
+        Option<&'a GravityScale>,
+    ),
+    (Option<&'a LinearDamping>, Option<&'a AngularDamping>),
+    (Option<&'a Mass>, Option<&'a Collider>),
+);
+
 impl Motion {
-    /// The motion of a body at `at`, turned by `turn`, from avian's components (a missing
-    /// velocity is none; a missing centre of mass is the body's origin).
-    fn of(
-        at: &Position,
-        turn: &Rotation,
-        v: Option<&LinearVelocity>,
-        w: Option<&AngularVelocity>,
-        com: Option<&ComputedCenterOfMass>,
-    ) -> Motion {
+    /// The motion of a body from avian's components (a missing velocity is none; a missing
+    /// centre of mass is the body's origin).
+    fn of((at, turn, v, w, com): BodyMotion) -> Motion {
         Motion {
             com: centre_of_mass(at, turn, com),
             linear: v.map_or(DVec2::ZERO, |v| v.0.as_dvec2()),
@@ -215,25 +235,11 @@ pub(crate) fn coupled(world: &World) -> bool {
     world.contains_resource::<Coupling>() && has_bodies(world)
 }
 
-/// What a body's energy reads ([`body_energy`]).
-type BodyEnergy<'a> = (
-    &'a RigidBody,
-    &'a Position,
-    &'a Rotation,
-    Option<&'a LinearVelocity>,
-    Option<&'a AngularVelocity>,
-    Option<&'a ComputedCenterOfMass>,
-    Option<&'a ComputedMass>,
-    Option<&'a ComputedAngularInertia>,
-    Option<&'a GravityScale>,
-    (Option<&'a Mass>, Option<&'a Collider>),
-);
-
 /// A dynamic body's energy in gravity `g`, J: its kinetic energy, ½M|v|² + ½Iω², and its
 /// potential, −M g·c (c its centre of mass; zero at the origin, as the particles' is). `None`
 /// for a body that does not move by its own dynamics (static or kinematic).
 fn body_energy(
-    (kind, at, turn, v, w, com, mass, inertia, scale, (given, shape)): BodyEnergy,
+    (kind, motion, (mass, inertia, scale), _, (given, shape)): BodyRead,
     g: DVec2,
 ) -> Option<f64> {
     if !kind.is_dynamic() {
@@ -251,7 +257,7 @@ fn body_energy(
             i = unit.angular_inertia as f64 * m / unit.mass as f64;
         }
     }
-    let motion = Motion::of(at, turn, v, w, com);
+    let motion = Motion::of(motion);
     let fall = g * scale.map_or(1.0, |s| s.0 as f64);
     Some(
         0.5 * m * motion.linear.length_squared() + 0.5 * i * motion.angular * motion.angular
@@ -267,14 +273,14 @@ pub fn bodies_energy(world: &mut World) -> f64 {
     let g = world
         .get_resource::<Gravity>()
         .map_or(DVec2::ZERO, |g| g.0.as_dvec2());
-    let mut bodies = world.query::<BodyEnergy>();
+    let mut bodies = world.query::<BodyRead>();
     bodies.iter(world).filter_map(|b| body_energy(b, g)).sum()
 }
 
 /// After avian's step: the dynamic bodies counted and their energy taken, for the panel and
 /// into the run's peak (with the particles' of the same tick) where a run keeps one.
 fn note_bodies_energy(
-    bodies: Query<BodyEnergy>,
+    bodies: Query<BodyRead>,
     gravity: Option<Res<Gravity>>,
     mut coupling: ResMut<Coupling>,
     peak: Option<ResMut<super::watch::EnergyPeak>>,

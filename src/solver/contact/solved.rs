@@ -12,11 +12,12 @@
 //! How (block descent, as VBD treats a vertex, and as Giles et al. 2025, "Augmented Vertex
 //! Block Descent", treat a rigid body): the body's objective over the step is its inertia,
 //! M/(2h²)|c − c̃|² + I/(2h²)(θ − θ̃)² with c̃, θ̃ where its engine would take it alone, plus
-//! its contacts. After each sweep of the particles the body takes one Newton step on it with
-//! the particles held: each contact's force F on its particle (the particle's block Hessian
-//! times its push out of the body, H δ) pushes the body back, and the contact's stiffness
-//! nᵀHn along the normal n, through the arm r × n, is the Hessian's. The next sweep keeps the
-//! particles out of the body where it now stands. At convergence the body's momentum change,
+//! its contacts. Were the body to stand at c, θ, each particle's block would end at its
+//! unconstrained step pushed out of the body, at the cost ½ nᵀHn d² (d the depth of that step
+//! in the body, H the block's Hessian, n the normal), and friction's share as the block takes
+//! it. After each sweep the body takes up to [`NEWTON_STEPS`] Newton steps on that objective
+//! with the particles held, each halved until it lowers it; the next sweep keeps the particles
+//! out of the body where it now stands. At convergence the body's momentum change,
 //! M (c − c̃)/h, is minus the contacts' impulse; the engine is given that change, so that it
 //! ends the step where the particles were kept out of it.
 
@@ -68,8 +69,10 @@ struct Body {
 }
 
 impl SolvedBodies {
-    /// The bodies behind `contact`'s obstacles for a step of `dt`, each starting where its
-    /// engine would take it alone. Returns whether there are any.
+    /// The bodies behind `contact`'s obstacles for a step of `dt`, each starting where the
+    /// step began (started where its engine alone would take it, a step of gravity into a net,
+    /// the first sweep pushed the net down by that step, and a box rested 11 cm too low at
+    /// 1/30 s). Returns whether there are any.
     pub(crate) fn ready(&mut self, contact: &InSolve, dt: f64) -> bool {
         self.clear();
         self.start.clear();

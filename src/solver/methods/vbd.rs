@@ -398,8 +398,8 @@ pub fn step(
     vb.before.resize(if chebyshev { n } else { 0 }, DVec2::ZERO);
     vb.previous
         .resize(if chebyshev { n } else { 0 }, DVec2::ZERO);
-    // Each vertex's last contact with a body, and the bodies among the unknowns, when the
-    // contacts are noted for bodies.
+    // The bodies among the unknowns, when the contacts are noted for bodies, with each
+    // vertex's last unconstrained block step and its block's Hessian for their steps.
     vb.bodies.clear();
     let solved = contact.is_some_and(|c| vb.bodies.ready(c, dt));
     let free_len = if solved { n } else { 0 };
@@ -448,10 +448,8 @@ pub fn step(
             if let Some((free, blocks)) = free.filter(|_| k > 0) {
                 // The bodies' steps with the particles held, on one member, from the last
                 // sweep's blocks; the sweep that follows keeps the particles out of the bodies
-                // where they then stand, so that the step ends with the two agreeing (a body
-                // moved after the last sweep ended inside the particles, and pushed its net a
-                // little further down each step: a box in a net at 1/30 s sagged 13 cm below
-                // its rest).
+                // where they then stand, so that the step ends on a sweep, with the particles
+                // out of each body where the solve leaves it.
                 if !team.share(0..1).is_empty() {
                     // SAFETY: the other members wait at the barrier below, touching nothing;
                     // the blocks were written before the barrier above.
