@@ -1193,3 +1193,86 @@ fn a_particle_in_the_way_of_a_moving_obstacle_is_struck() {
     assert_eq!(runs, 594);
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+/// A box resting on the ground and sliding at 2 m/s, under VBD at a frame's step and at two:
+/// with friction μ = 0.5 it stops within 12 % of the v²/(2μg) = 0.408 m that Coulomb gives, and
+/// without friction it slides on at its speed (3 m in 1.5 s, within 1 %). A stiff box (k =
+/// 1e5 N/m, 10 g particles: block descent moves it as a whole by about 1/90,000 of the
+/// remaining way a sweep at 1/30 s). Before its groups slid along the surface as a whole
+/// (`contact::slide`), it kept none of its speed, with friction or without: its first step was
+/// held back as if it were landing, and the descent never gave the body its way back.
+#[test]
+fn vbd_slides_a_box_on_the_ground_as_coulomb_says_at_a_frames_step() {
+    let (v, mu, seconds) = (2.0, 0.5, 1.5);
+    let slid = |dt: f64, friction: f64| {
+        let mut scene = bare_scene(Integrator::Vbd, dt);
+        (scene.gravity, scene.damping, scene.ground) = ((0.0, -9.8), 0.0, Some(0.0));
+        scene.generate = vec![Generator::Grid {
+            cols: 8,
+            rows: 4,
+            min: (0.1, 0.0),
+            max: (0.24, 0.06),
+            mass: 0.01,
+            stiffness: 1e5,
+            shear: true,
+            pin: hooke::scene::Pin::None,
+            vel: (v, 0.0),
+            damping: None,
+            plastic: None,
+        }];
+        scene.contact = Some(hooke::sim::ContactSettings {
+            friction,
+            ..Default::default()
+        });
+        let mut app = app_with(scene);
+        let mean = |app: &App| {
+            let x = solver(app).x();
+            x.iter().map(|p| p.x).sum::<f64>() / x.len() as f64
+        };
+        let before = mean(&app);
+        step(&mut app, (seconds / dt).round() as u64);
+        mean(&app) - before
+    };
+    let coulomb = v * v / (2.0 * mu * 9.8);
+    for dt in [FRAME, 2.0 * FRAME] {
+        let gripped = slid(dt, mu);
+        assert!(
+            (gripped / coulomb - 1.0).abs() < 0.12,
+            "at {dt} s the box slid {gripped} m; Coulomb stops it in {coulomb} m"
+        );
+        let free = slid(dt, 0.0);
+        assert!(
+            (free / (v * seconds) - 1.0).abs() < 0.01,
+            "at {dt} s the box slid {free} m without friction, not {} m",
+            v * seconds
+        );
+    }
+}
+
+/// The shipped `slope` under VBD at a frame's step and at two: the box on the 35° slope
+/// (tan 35° = 0.70 over μ = 0.5) slides down onto the ground, as it does under symplectic Euler
+/// at 1e-4 s, and the box on the 20° slope (0.36 under it) holds: in 3 s its centre moves 0.3
+/// mm as it settles, under symplectic Euler 2 mm. Before the groups slid as a whole
+/// (`contact::slide`), the steep box stood still at 1/120 s and larger.
+#[test]
+fn vbd_slides_the_steep_slopes_box_and_holds_the_gentle_ones_at_a_frames_step() {
+    // Particles 0–24 are the gentle slope's box, 25–49 the steep one's.
+    let centre = |app: &App, r: std::ops::Range<usize>| {
+        let x = &solver(app).x()[r.clone()];
+        x.iter().copied().sum::<DVec2>() / r.len() as f64
+    };
+    for dt in [FRAME, 2.0 * FRAME] {
+        let mut app = shipped("slope", Integrator::Vbd, dt);
+        let (gentle, steep) = (centre(&app, 0..25), centre(&app, 25..50));
+        step(&mut app, (3.0 / dt).round() as u64);
+        let crept = (centre(&app, 0..25) - gentle).length();
+        assert!(crept < 1e-3, "at {dt} s the gentle box crept {crept} m");
+        let end = centre(&app, 25..50).y;
+        assert!(
+            end < 0.1,
+            "at {dt} s the steep box's centre is at {end} m, from {} m; on the ground it rests \
+             at 0.04 m",
+            steep.y
+        );
+    }
+}

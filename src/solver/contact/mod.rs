@@ -4,7 +4,8 @@
 //! solve that kept contact itself ([`settle`]); contact between particles, with their neighbour
 //! lists ([`pairs`]); contact inside the large-step methods' solves (`inside`), the contact
 //! forces their global solves learn and the step each body takes along them (`support`), and
-//! where VBD's descent starts a body landing on a surface (`landing`); and the impulses the
+//! where VBD's descent starts a body landing on a surface (`landing`) and how it slides a body
+//! along one as a whole (`slide`); and the impulses the
 //! obstacles take back ([`reaction`]), or the bodies a solve moves among its unknowns
 //! (`solved`).
 //!
@@ -20,6 +21,7 @@ pub mod outline;
 pub mod pairs;
 mod pass;
 pub mod reaction;
+pub(crate) mod slide;
 pub(crate) mod solved;
 pub(crate) mod support;
 

@@ -49,6 +49,7 @@
 
 use crate::solver::contact::inside::InSolve;
 use crate::solver::contact::landing::Landing;
+use crate::solver::contact::slide::{Contact, Slides};
 use crate::solver::contact::solved::SolvedBodies;
 use crate::solver::state::State;
 use crate::solver::threads::Threads;
@@ -87,6 +88,9 @@ pub struct Vbd {
     last_edits: Option<u64>,
     /// The buffers that hold a landing body's start back ([`Landing`]).
     landing: Landing,
+    /// The groups that slide along a surface as a whole, with each vertex's contact from the
+    /// last sweep ([`Slides`]).
+    slides: Slides,
     /// Colourings so far, and their wall time, s.
     pub colourings: u64,
     pub colouring_seconds: f64,
@@ -223,6 +227,8 @@ struct Block<'a> {
     /// When bodies move among the unknowns: each vertex's unconstrained step and its block's
     /// Hessian, for the bodies' steps.
     free: Option<(Shared<DVec2>, Shared<[f64; 3]>)>,
+    /// With contact: each vertex's contact, for the groups' slides ([`Slides`]).
+    contacts: Option<Shared<Contact>>,
     /// s/h² and 1/h.
     inertia: f64,
     inv_h: f64,
@@ -286,7 +292,12 @@ impl Block<'_> {
             // Projected block descent: the vertex's constraints (the obstacles, the ground)
             // are its own, so holding each step's result to them descends on the constrained
             // objective.
-            c.keep_out(i, &mut end, self.s.x[i]);
+            let held = c.keep_out(i, &mut end, self.s.x[i]);
+            if let Some(contacts) = self.contacts {
+                let met = Contact::met(c, held, xi + step, end, [h00, h01, h11]);
+                // SAFETY: the caller's: vertex i is this thread's alone now.
+                unsafe { contacts.set(i, met) };
+            }
         }
         if let Some((free, blocks)) = self.free {
             // SAFETY: the caller's: vertex i is this thread's alone now.
@@ -409,6 +420,11 @@ pub fn step(
     vb.blocks.resize(free_len, [0.0; 3]);
     let free = solved.then(|| (Shared::new(&mut vb.free), Shared::new(&mut vb.blocks)));
     let surface = contact.map_or((0.0, 0.0), |c| (c.radius(), c.friction()));
+    let sliding = contact.is_some();
+    if sliding {
+        vb.slides.ready(s);
+    }
+    let contacts = sliding.then(|| Shared::new(&mut vb.slides.contacts[..]));
     let block = Block {
         s,
         vbd_adj_start: &vb.adjacency_start,
@@ -418,6 +434,7 @@ pub fn step(
         dashpot: s.materials.dashpot(),
         contact,
         free,
+        contacts,
         inertia: scale / h2,
         inv_h: 1.0 / dt,
     };
@@ -430,6 +447,8 @@ pub fn step(
     let pair_len = pair_scratch.len();
     let pair_scratch = Shared::new(&mut pair_scratch);
     let bodies = Shared::new(std::slice::from_mut(&mut vb.bodies));
+    let slides = &vb.slides;
+    let (y, mass) = (&vb.y[..], &s.mass[..]);
     // The pool's threads as one team for the whole step (a fork and a join per iteration
     // cost as much as an iteration of a 32² cloth).
     threads.team(springs, |team| {
@@ -456,6 +475,18 @@ pub fn step(
                     let (bodies, free, blocks) =
                         unsafe { (&mut bodies.part(0..1)[0], free.read(), blocks.read()) };
                     bodies.step(free, blocks, x0, w, surface);
+                }
+                team.wait();
+            }
+            if sliding {
+                // The groups resting on a surface slide along it as a whole, on one member,
+                // from the contacts of the last sweep (of the last step, before the first).
+                if !team.share(0..1).is_empty() {
+                    // SAFETY: the other members wait at the barrier below, touching nothing;
+                    // the contacts were written before the barrier above.
+                    let shared = contacts.expect("readied with the slides");
+                    let (seen, x) = unsafe { (shared.read(), x.part(0..n)) };
+                    slides.step(seen, x, (y, x0, mass), inertia, surface.1);
                 }
                 team.wait();
             }

@@ -1,0 +1,352 @@
+//! A body sliding on a surface as a whole, between vertex block descent's sweeps: each group
+//! of particles joined by springs that rests on one still surface takes a step of its
+//! translation along that surface, with Coulomb's friction at the normal force that stops the
+//! group's way into it.
+//!
+//! Why: block descent (`methods::vbd`) moves each vertex with its neighbours held, so a body
+//! stiff on the step's scale moves as a whole by about m/(m + h²Σk) of the remaining way a
+//! sweep (1/556 for a strip of 20 g particles at k = 1e4 and 1/30 s). Friction reached such a
+//! body only through the particles touching the surface, each held back by μ times its own
+//! push, and the body did not follow within a step's sweeps: the `slope` scene's box on its 35°
+//! slope (tan 35° = 0.70 > μ = 0.5) stood still at 1/120 s and larger, and a box resting on
+//! the ground and sliding at 2 m/s slid 3 cm at 1/60 s where Coulomb stops it in 0.41 m, and 4
+//! cm without friction, where it slides on (`docs/performance-log.md`, 2026-12-07).
+//!
+//! How: the group's translation δ along the surface's tangent t is one more block of the same
+//! objective, G plus friction's dissipation μ Λ |u_t| (u the sliding from the step's start, Λ
+//! the normal force, lagged). Along a uniform translation the springs, dashpots and gas forces
+//! within the group cancel, so the block is
+//!
+//! ½ (s/h²) M (δ − δ*)² + μ Λ |ū + δ|,  δ* = Σ m (y − x)·t / M,
+//!
+//! with ū the contacts' sliding along t, weighted by the normal forces the sweep met there.
+//! Its minimiser holds the group still where |ū + δ*| ≤ b = μ Λ h²/(s M), and takes b off its
+//! way otherwise. Λ is the larger of two: what stops the group's own way into the surface (b =
+//! μ d, d the group's mean way from the step's start toward y into the surface, past the gap
+//! its contacts started at: g h² for a body at rest on the ground, Λ its weight), and the
+//! normal forces the sweep met at its contacts (they carry the load of the bodies stacked on
+//! it). The vertices' own steps still hold each contact with μ times its push, so a body at
+//! rest stays put to the last particle. A group with a pinned particle, or touching a moving
+//! surface, a body another engine moves, or surfaces of more than one direction (a box in a
+//! corner, a cloth over a ball) takes no such step.
+
+use super::groups::{join, root};
+use super::inside::{Held, InSolve};
+use crate::solver::state::State;
+use glam::DVec2;
+
+/// A vertex's contact in the last sweep: the surface's normal and the normal force its block
+/// step met there, N ([`NO_CONTACT`] for none, [`MOVING`] for a surface that moves).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Contact {
+    pub normal: DVec2,
+    pub force: f64,
+}
+
+/// No contact in the last sweep.
+pub(crate) const NO_CONTACT: Contact = Contact {
+    normal: DVec2::ZERO,
+    force: 0.0,
+};
+
+/// A contact with a surface that moves, or with a body another engine moves: its group takes no
+/// step.
+const MOVING: f64 = -1.0;
+
+/// How far apart two contacts' normals may point and still be one surface's: cos of 0.1°.
+const ONE_DIRECTION: f64 = 0.999_998_5;
+
+impl Contact {
+    /// The contact a vertex's block step met: `held` by `c`'s surfaces after its unconstrained
+    /// step to `free`, put at `end`, its block's Hessian `h` (h00, h01, h11).
+    #[inline]
+    pub(crate) fn met(
+        c: &InSolve,
+        held: Option<Held>,
+        free: DVec2,
+        end: DVec2,
+        h: [f64; 3],
+    ) -> Self {
+        let Some(held) = held else {
+            return NO_CONTACT;
+        };
+        let still = held.obstacle.is_none_or(|o| {
+            !c.obstacles()[o].moves() && !c.reactions().is_some_and(|r| r.feels(o))
+        });
+        if !still {
+            return Contact {
+                normal: held.normal,
+                force: MOVING,
+            };
+        }
+        let push = end - free;
+        let force = DVec2::new(h[0] * push.x + h[1] * push.y, h[1] * push.x + h[2] * push.y);
+        Contact {
+            normal: held.normal,
+            force: held.normal.dot(force).max(0.0),
+        }
+    }
+}
+
+/// The groups, and each vertex's contact from the last sweep, kept from step to step.
+#[derive(Debug, Default, Clone)]
+pub(crate) struct Slides {
+    /// The state revision the groups are for.
+    revision: Option<u64>,
+    /// The groups' members, by group, and each group's start in it (and the end).
+    members: Vec<u32>,
+    starts: Vec<usize>,
+    /// Each group's mass, kg.
+    mass: Vec<f64>,
+    /// Each vertex's contact in the last sweep (the vertices' block steps write it).
+    pub(crate) contacts: Vec<Contact>,
+}
+
+impl Slides {
+    /// Readies the groups for `s`'s springs and pins (again only after an edit of them).
+    pub(crate) fn ready(&mut self, s: &State) {
+        let n = s.x.len();
+        if self.revision == Some(s.revision) && self.contacts.len() == n {
+            return;
+        }
+        self.revision = Some(s.revision);
+        self.contacts.clear();
+        self.contacts.resize(n, NO_CONTACT);
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        for sp in &s.springs {
+            join(&mut parent, sp.a, sp.b);
+        }
+        // A group with a pinned particle is held by it: it takes no step.
+        let mut pinned = vec![false; n];
+        for i in 0..n {
+            if s.inv_mass[i] == 0.0 {
+                pinned[root(&mut parent, i as u32) as usize] = true;
+            }
+        }
+        let mut count = vec![0usize; n];
+        for i in 0..n {
+            let r = root(&mut parent, i as u32) as usize;
+            if !pinned[r] {
+                count[r] += 1;
+            }
+        }
+        let mut group_of = vec![u32::MAX; n];
+        self.starts.clear();
+        self.starts.push(0);
+        for (r, &c) in count.iter().enumerate() {
+            if c > 0 {
+                group_of[r] = (self.starts.len() - 1) as u32;
+                self.starts.push(self.starts.last().unwrap() + c);
+            }
+        }
+        let mut at = self.starts.clone();
+        self.members.clear();
+        self.members.resize(*self.starts.last().unwrap(), 0);
+        self.mass.clear();
+        self.mass.resize(self.starts.len() - 1, 0.0);
+        for i in 0..n {
+            let r = root(&mut parent, i as u32) as usize;
+            if pinned[r] {
+                continue;
+            }
+            let g = group_of[r] as usize;
+            self.members[at[g]] = i as u32;
+            at[g] += 1;
+            self.mass[g] += s.mass[i];
+        }
+    }
+
+    /// Each group resting on one still surface takes its step along it (see the module's
+    /// notes): `contacts` each vertex's in the last sweep ([`Self::contacts`]), `x` the
+    /// iterate, `y` the inertial targets, `x0` the step's start, `inertia` s/h², `friction` μ.
+    /// Returns how many groups moved.
+    pub(crate) fn step(
+        &self,
+        contacts: &[Contact],
+        x: &mut [DVec2],
+        (y, x0, mass): (&[DVec2], &[DVec2], &[f64]),
+        inertia: f64,
+        friction: f64,
+    ) -> usize {
+        let mut moved = 0;
+        for (g, members) in self.starts.windows(2).enumerate() {
+            let members = &self.members[members[0]..members[1]];
+            let Some((normal, sliding, gap, force)) = contact_of(contacts, members, x, x0) else {
+                continue;
+            };
+            let t = normal.perp();
+            // The inertia's pull along the surface, and the group's way into it over the step,
+            // each the group's mean.
+            let (mut pull, mut into) = (0.0, 0.0);
+            for &i in members {
+                let i = i as usize;
+                pull += mass[i] * (y[i] - x[i]).dot(t);
+                into -= mass[i] * (y[i] - x0[i]).dot(normal);
+            }
+            let m = self.mass[g];
+            // Friction's reach: μ times the normal force over the block's stiffness, that of the
+            // way into the surface that the surface takes back, past the gap the contacts
+            // started at (the weight of a body resting there, the impulse that stops one
+            // landing), or of the sweep's own contact forces where those are more (the load of
+            // the bodies stacked on it, whose pushes reach it through the pairs: the pile's boxes
+            // on the ground, held by their own weight alone, were still stirring at 6 s). Not
+            // the sweep's forces alone: those run far over the weight while a body's rows settle
+            // (1,070 N against 7.4 N in a box's first sweep at 1/30 s, which held it still)
+            // and under it while the body rocks (a box slid 19 % too far at 1/30 s).
+            let way_in = (into / m - gap).max(0.0);
+            let pressed = force / (inertia * m);
+            let (free, budget) = (pull / m, friction * way_in.max(pressed));
+            let way = sliding + free;
+            let delta = if way.abs() <= budget {
+                -sliding
+            } else {
+                free - budget * way.signum()
+            };
+            if delta == 0.0 {
+                continue;
+            }
+            for &i in members {
+                x[i as usize] += t * delta;
+            }
+            moved += 1;
+        }
+        moved
+    }
+}
+
+/// A group's contacts: their one normal, their sliding along the surface's tangent
+/// (weighted by the normal forces the sweep met), the least gap they started at and those
+/// forces summed; `None`
+/// when the surface pushed none of them, or one is on a moving surface, or they touch
+/// surfaces of more than one direction.
+fn contact_of(
+    contacts: &[Contact],
+    members: &[u32],
+    x: &[DVec2],
+    x0: &[DVec2],
+) -> Option<(DVec2, f64, f64, f64)> {
+    let mut normal = None;
+    let (mut force, mut sliding, mut gap) = (0.0, 0.0, f64::INFINITY);
+    for &i in members {
+        let i = i as usize;
+        let c = contacts[i];
+        if c == NO_CONTACT {
+            continue;
+        }
+        if c.force == MOVING {
+            return None;
+        }
+        let n = *normal.get_or_insert(c.normal);
+        if n.dot(c.normal) < ONE_DIRECTION {
+            return None;
+        }
+        force += c.force;
+        sliding += c.force * (x[i] - x0[i]).dot(n.perp());
+        // (The sweep left it on the surface: its start stood this far off it.)
+        gap = gap.min((x0[i] - x[i]).dot(n).max(0.0));
+    }
+    let normal = normal?;
+    (force > 0.0).then(|| (normal, sliding / force, gap, force))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::solver::fixtures::block;
+
+    /// s/h² at 1/60 s.
+    const INERTIA: f64 = 3600.0;
+
+    /// A 4 × 2 block of 0.16 kg resting on the ground (its bottom row touching, pushed `push`
+    /// N each), its iterate moved 3 cm to the right of its start and its inertial targets 1
+    /// cm under the iterate and `pull` to the side of it. Returns the block's move along the
+    /// ground in the group's step, with friction `mu`.
+    fn slid(pull: f64, mu: f64, pin: bool) -> f64 {
+        slid_pushed(pull, mu, pin, 1.0)
+    }
+
+    fn slid_pushed(pull: f64, mu: f64, pin: bool, push: f64) -> f64 {
+        let mut s = block(4, 2, 0.0);
+        if pin {
+            s.inv_mass[7] = 0.0;
+        }
+        let x0 = s.x.clone();
+        let shift = DVec2::new(0.03, 0.0);
+        let mut x: Vec<DVec2> = x0.iter().map(|p| *p + shift).collect();
+        let y: Vec<DVec2> = x.iter().map(|p| *p + DVec2::new(pull, -0.01)).collect();
+        let mut slides = Slides::default();
+        slides.ready(&s);
+        for i in 0..4 {
+            slides.contacts[i] = Contact {
+                normal: DVec2::Y,
+                force: push,
+            };
+        }
+        let before = x[5];
+        slides.step(
+            &slides.contacts.clone(),
+            &mut x,
+            (&y, &x0, &s.mass),
+            INERTIA,
+            mu,
+        );
+        // A translation along the ground: every particle moves alike, none off its height.
+        for (p, q) in x.iter().zip(&x0) {
+            assert!((p.y - q.y).abs() < 1e-15);
+            assert!(((p.x - q.x) - (x[5].x - x0[5].x)).abs() < 1e-15);
+        }
+        x[5].x - before.x
+    }
+
+    /// Coulomb at the block's own weight: the inertia pulls it 5 mm further along, friction
+    /// takes back μ times its 1 cm way into the ground (the contacts' 4 N over its stiffness,
+    /// 4/(3600 · 0.16) = 6.9 mm, are less). Under μ = 0.3 it goes on by 5 mm − 3 mm; under
+    /// μ = 4 (friction's reach 4 cm) it stops where the step began, 3 cm back; without
+    /// friction it goes the whole 5 mm; pinned, it stays. Pressed by a load from above (10 N
+    /// a contact: 40/(3600 · 0.16) = 6.9 cm), friction's reach under μ = 0.3 is 2.08 cm:
+    /// pulled 8 cm along, it goes 8 − 2.08 cm.
+    #[test]
+    fn a_group_on_the_ground_slides_as_coulomb_says() {
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
+        assert!(close(slid(0.005, 0.3, false), 0.002));
+        assert!(close(slid(0.005, 4.0, false), -0.03));
+        assert!(close(slid(0.005, 0.0, false), 0.005));
+        assert!(close(slid(-0.05, 0.3, false), -0.047));
+        assert_eq!(slid(0.005, 0.3, true), 0.0);
+        let reach = 0.3 * 40.0 / (INERTIA * 0.16);
+        assert!(close(slid_pushed(-0.08, 0.3, false, 10.0), -(0.08 - reach)));
+    }
+
+    /// A group whose contacts face two ways (a box in a corner) takes no step, nor one that
+    /// touches a moving surface.
+    #[test]
+    fn a_group_on_two_surfaces_or_a_moving_one_takes_no_step() {
+        let s = block(3, 2, 0.0);
+        let x0 = s.x.clone();
+        let y: Vec<DVec2> = x0.iter().map(|p| *p + DVec2::new(0.01, -0.01)).collect();
+        for other in [
+            Contact {
+                normal: DVec2::X,
+                force: 1.0,
+            },
+            Contact {
+                normal: DVec2::Y,
+                force: MOVING,
+            },
+        ] {
+            let mut slides = Slides::default();
+            slides.ready(&s);
+            slides.contacts[0] = Contact {
+                normal: DVec2::Y,
+                force: 1.0,
+            };
+            slides.contacts[2] = other;
+            let mut x = x0.clone();
+            assert_eq!(
+                slides.step(&slides.contacts, &mut x, (&y, &x0, &s.mass), INERTIA, 0.5),
+                0
+            );
+            assert_eq!(x, x0);
+        }
+    }
+}
