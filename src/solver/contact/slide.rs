@@ -30,6 +30,10 @@
 //! surface, a body another engine moves, or surfaces of more than one direction (a box in a
 //! corner, a cloth over a ball) takes no such step.
 
+//!
+//! The groups serve implicit Euler too, whose ground friction after the solve slows each of them
+//! as a whole (`methods::implicit_euler`'s `rub`).
+
 use super::groups::{join, root};
 use super::inside::{Held, InSolve};
 use crate::solver::state::State;
@@ -100,7 +104,12 @@ pub(crate) struct Slides {
     mass: Vec<f64>,
     /// Each vertex's contact in the last sweep (the vertices' block steps write it).
     pub(crate) contacts: Vec<Contact>,
+    /// Each particle's group ([`NO_GROUP`] for one in a group with a pinned particle).
+    group_of: Vec<u32>,
 }
+
+/// The group of a particle whose group has a pinned particle: it has none here.
+pub(crate) const NO_GROUP: u32 = u32::MAX;
 
 impl Slides {
     /// Readies the groups for `s`'s springs and pins (again only after an edit of them).
@@ -139,6 +148,8 @@ impl Slides {
                 self.starts.push(self.starts.last().unwrap() + c);
             }
         }
+        self.group_of.clear();
+        self.group_of.resize(n, NO_GROUP);
         let mut at = self.starts.clone();
         self.members.clear();
         self.members.resize(*self.starts.last().unwrap(), 0);
@@ -150,10 +161,24 @@ impl Slides {
                 continue;
             }
             let g = group_of[r] as usize;
+            self.group_of[i] = g as u32;
             self.members[at[g]] = i as u32;
             at[g] += 1;
             self.mass[g] += s.mass[i];
         }
+    }
+
+    /// The groups: each one's members and mass, kg.
+    pub(crate) fn groups(&self) -> impl Iterator<Item = (&[u32], f64)> + '_ {
+        self.starts
+            .windows(2)
+            .zip(&self.mass)
+            .map(|(w, &m)| (&self.members[w[0]..w[1]], m))
+    }
+
+    /// Particle `i`'s group, [`NO_GROUP`] where a pinned particle holds it.
+    pub(crate) fn group_of(&self, i: usize) -> u32 {
+        self.group_of[i]
     }
 
     /// Each group resting on one still surface takes its step along it (see the module's

@@ -2,6 +2,7 @@
 //! from step to step, and implicit Euler's counters. One struct for both: implicit Euler's
 //! Newton iterates use the stage buffers, so a scene never holds two sets.
 
+use crate::solver::contact::slide::Slides;
 use crate::solver::contact::support::Support;
 use crate::solver::forces::material::GasJacobian;
 use crate::solver::forces::stiffness::{Block, Sym2};
@@ -29,6 +30,9 @@ pub struct Scratch {
     pub(crate) pairs: SpringBuffers,
     /// Implicit Euler: the gas bodies' share of the Newton matrix (empty without them).
     pub(super) gas: GasJacobian,
+    /// Implicit Euler: the bodies (groups joined by springs) the ground's friction slows as a
+    /// whole ([`super::implicit_euler`]'s `rub`).
+    pub(super) groups: Slides,
     /// Implicit Euler's Newton steps so far, and its time steps.
     pub(super) newton_steps: u64,
     pub(super) newton_solves: u64,

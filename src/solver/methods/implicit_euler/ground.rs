@@ -15,6 +15,7 @@
 //! Coulomb's from the held rows' impulses ([`rub`]).
 
 use super::cg::{CgSettings, FREE, HELD, add_to_velocities, solve, times_a, unfiltered};
+use crate::solver::contact::slide::NO_GROUP;
 use crate::solver::methods::scratch::Scratch;
 use crate::solver::state::State;
 use crate::solver::threads::Threads;
@@ -122,20 +123,53 @@ fn settle(
 }
 
 /// Coulomb friction on the particles the ground held in the last solve (its right-hand side in
-/// `cg.b`, its solution in `cg.dv`), after the step's last Newton step: each one's horizontal
-/// velocity slowed toward 0 by up to μ j / m, j the ground's push over the step,
-/// (A Δv − b)_y. The contact's projection rubs only what it pushes, and the particles held
+/// `cg.b`, its solution in `cg.dv`), after the step's last Newton step, body by body: each group
+/// of particles joined by springs ([`Slides`]) that the ground holds somewhere has its
+/// horizontal velocity slowed, every member alike, toward its held particles' mean (weighted by
+/// their pushes) by up to μ J / M, J the ground's push on the group over the step, Σ (A Δv −
+/// b)_y over its held rows, and M its mass. A particle whose group a pin holds is slowed alone,
+/// by up to μ j / m. The contact's projection rubs only what it pushes, and the particles held
 /// here end on the ground, where it pushes nothing.
+///
+/// Why whole bodies: slowed particle by particle, after a solve that had moved them with their
+/// neighbours, the held particles were held still while the rest slid on, and the springs
+/// between them stretched: a box sliding on the ground at 2 m/s with μ = 0.5 rose from 1.65 J
+/// to 58.7 J at 1/30 s, and the `paddle`'s strip, its end landing first under the leaning strip's
+/// push, rose from 10.4 J to 36.8 J at 1/60 s (`docs/performance-log.md`, 2026-12-07).
 pub(super) fn rub(s: &mut State, sc: &mut Scratch, h2: f64, friction: f64, threads: &Threads) {
     if friction == 0.0 || !sc.cg.filter.contains(&HELD) {
         return;
     }
     impulses(s, sc, h2, threads);
     let cg = &sc.cg;
-    for i in 0..s.x.len() {
+    let push = |i: usize| {
         if cg.filter[i] == HELD {
-            let push = (cg.ap[i].y - cg.b[i].y).max(0.0);
-            let slowed = friction * push * s.inv_mass[i];
+            (cg.ap[i].y - cg.b[i].y).max(0.0)
+        } else {
+            0.0
+        }
+    };
+    sc.groups.ready(s);
+    for (members, mass) in sc.groups.groups() {
+        let (mut pushed, mut sliding) = (0.0, 0.0);
+        for &i in members {
+            let j = push(i as usize);
+            pushed += j;
+            sliding += j * s.v[i as usize].x;
+        }
+        if pushed == 0.0 {
+            continue;
+        }
+        let sliding = sliding / pushed;
+        let reach = friction * pushed / mass;
+        let change = -sliding.signum() * sliding.abs().min(reach);
+        for &i in members {
+            s.v[i as usize].x += change;
+        }
+    }
+    for i in 0..s.x.len() {
+        if sc.groups.group_of(i) == NO_GROUP && cg.filter[i] == HELD {
+            let slowed = friction * push(i) * s.inv_mass[i];
             let v = &mut s.v[i].x;
             *v = v.signum() * (v.abs() - slowed).max(0.0);
         }
