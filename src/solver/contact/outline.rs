@@ -37,7 +37,7 @@
 //! two ends take the whole push and the velocity pass, and an obstacle that stands for a body
 //! takes back the impulse ([`Reactions`]).
 
-use super::groups::{join, root};
+use super::groups::bodies;
 use super::obstacle::{Placed, SLOP, Surface, respond};
 use super::reaction::Reactions;
 use crate::solver::state::State;
@@ -513,12 +513,7 @@ impl Outlines {
     /// Finds the bodies and their outline edges from the state's springs and positions.
     fn find(&mut self, s: &State) {
         let n = s.x.len();
-        // Bodies: union–find over the springs.
-        let mut parent: Vec<u32> = (0..n as u32).collect();
-        for sp in &s.springs {
-            join(&mut parent, sp.a, sp.b);
-        }
-        self.body = (0..n as u32).map(|i| root(&mut parent, i)).collect();
+        self.body = bodies(&s.springs, n);
         let (spans, adjacent) = super::pairs::spring_neighbours(s);
         let neighbours = |i: u32| {
             let (a, b) = spans[i as usize];

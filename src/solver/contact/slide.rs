@@ -29,12 +29,11 @@
 //! rest stays put to the last particle. A group with a pinned particle, or touching a moving
 //! surface, a body another engine moves, or surfaces of more than one direction (a box in a
 //! corner, a cloth over a ball) takes no such step.
-
 //!
 //! The groups serve implicit Euler too, whose ground friction after the solve slows each of them
 //! as a whole (`methods::implicit_euler`'s `rub`).
 
-use super::groups::{join, root};
+use super::groups::bodies;
 use super::inside::{Held, InSolve};
 use crate::solver::state::State;
 use glam::DVec2;
@@ -121,50 +120,45 @@ impl Slides {
         self.revision = Some(s.revision);
         self.contacts.clear();
         self.contacts.resize(n, NO_CONTACT);
-        let mut parent: Vec<u32> = (0..n as u32).collect();
-        for sp in &s.springs {
-            join(&mut parent, sp.a, sp.b);
-        }
+        let body = bodies(&s.springs, n);
         // A group with a pinned particle is held by it: it takes no step.
         let mut pinned = vec![false; n];
         for i in 0..n {
             if s.inv_mass[i] == 0.0 {
-                pinned[root(&mut parent, i as u32) as usize] = true;
+                pinned[body[i] as usize] = true;
             }
         }
         let mut count = vec![0usize; n];
-        for i in 0..n {
-            let r = root(&mut parent, i as u32) as usize;
-            if !pinned[r] {
-                count[r] += 1;
+        for &b in &body {
+            if !pinned[b as usize] {
+                count[b as usize] += 1;
             }
         }
-        let mut group_of = vec![u32::MAX; n];
+        // Each body's group, by the body's name (its smallest index).
+        let mut group_of_body = vec![NO_GROUP; n];
         self.starts.clear();
         self.starts.push(0);
-        for (r, &c) in count.iter().enumerate() {
+        for (b, &c) in count.iter().enumerate() {
             if c > 0 {
-                group_of[r] = (self.starts.len() - 1) as u32;
+                group_of_body[b] = (self.starts.len() - 1) as u32;
                 self.starts.push(self.starts.last().unwrap() + c);
             }
         }
         self.group_of.clear();
-        self.group_of.resize(n, NO_GROUP);
+        self.group_of
+            .extend(body.iter().map(|&b| group_of_body[b as usize]));
         let mut at = self.starts.clone();
         self.members.clear();
         self.members.resize(*self.starts.last().unwrap(), 0);
         self.mass.clear();
         self.mass.resize(self.starts.len() - 1, 0.0);
-        for i in 0..n {
-            let r = root(&mut parent, i as u32) as usize;
-            if pinned[r] {
-                continue;
+        for (i, &g) in self.group_of.iter().enumerate() {
+            if g != NO_GROUP {
+                let g = g as usize;
+                self.members[at[g]] = i as u32;
+                at[g] += 1;
+                self.mass[g] += s.mass[i];
             }
-            let g = group_of[r] as usize;
-            self.group_of[i] = g as u32;
-            self.members[at[g]] = i as u32;
-            at[g] += 1;
-            self.mass[g] += s.mass[i];
         }
     }
 
@@ -239,10 +233,9 @@ impl Slides {
     }
 }
 
-/// A group's contacts: their one normal, their sliding along the surface's tangent
-/// (weighted by the normal forces the sweep met), the least gap they started at and those
-/// forces summed; `None`
-/// when the surface pushed none of them, or one is on a moving surface, or they touch
+/// A group's contacts: their one normal, their sliding along the surface's tangent (weighted by
+/// the normal forces the sweep met), the least gap they started at and those forces summed;
+/// `None` when the surface pushed none of them, or one is on a moving surface, or they touch
 /// surfaces of more than one direction.
 fn contact_of(
     contacts: &[Contact],

@@ -123,13 +123,13 @@ fn settle(
 }
 
 /// Coulomb friction on the particles the ground held in the last solve (its right-hand side in
-/// `cg.b`, its solution in `cg.dv`), after the step's last Newton step, body by body: each group
-/// of particles joined by springs ([`Slides`]) that the ground holds somewhere has its
+/// `cg.b`, its solution in `cg.dv`), after the step's last Newton step, body by body: each group of
+/// particles joined by springs (`contact::slide::Slides`) that the ground holds somewhere has its
 /// horizontal velocity slowed, every member alike, toward its held particles' mean (weighted by
-/// their pushes) by up to μ J / M, J the ground's push on the group over the step, Σ (A Δv −
-/// b)_y over its held rows, and M its mass. A particle whose group a pin holds is slowed alone,
-/// by up to μ j / m. The contact's projection rubs only what it pushes, and the particles held
-/// here end on the ground, where it pushes nothing.
+/// their pushes) by up to μ J / M, J the ground's push on the group over the step, Σ (A Δv − b)_y
+/// over its held rows, and M its mass. A particle whose group a pin holds is slowed alone, by up to
+/// μ j / m. The contact's projection rubs only what it pushes, and the particles held here end on
+/// the ground, where it pushes nothing.
 ///
 /// Why whole bodies: slowed particle by particle, after a solve that had moved them with their
 /// neighbours, the held particles were held still while the rest slid on, and the springs
