@@ -739,7 +739,9 @@ fn shipped(name: &str, integrator: Integrator, dt: f64) -> App {
 /// Implicit Euler sizes its contact forces by projective dynamics' line search: a gas body
 /// landing on a slope, two of them rolling into each other by their outlines, a cloth on a ball
 /// and a box sliding down a slope, each at 1/30 s, never end a step above their start energy
-/// (by 1e-3 of it). Learned particle by particle, the forces that stopped a landing ball's
+/// (by 1e-3 of it; the `slope` by 3e-3: in its first two steps at 1/30 s the solve pushes its
+/// resting boxes 1 cm into their slopes and the push back out lifts them 0.4 mm, 7.960 J to
+/// 7.978 J, which their slide down the slopes hid until the obstacles' friction held them). Learned particle by particle, the forces that stopped a landing ball's
 /// lowest particles flung it: the `balloon` rose from 117 J to 29,190 J, `cloth_on_ball` from
 /// 13.3 J to 70.7 J and `slope` from 7.96 J to 63.1 J. The `paddle`'s strip, sliding off its
 /// turning paddle onto the ground, neither, at 1/60 and 1/30 s: the ground's friction slowed
@@ -748,12 +750,12 @@ fn shipped(name: &str, integrator: Integrator, dt: f64) -> App {
 #[test]
 fn implicit_euler_lands_gas_bodies_and_cloths_at_a_frames_step() {
     let mut failures = vec![];
-    for (name, dt) in [
-        ("balloon", 1.0 / 30.0),
-        ("cloth_on_ball", 1.0 / 30.0),
-        ("slope", 1.0 / 30.0),
-        ("paddle", FRAME),
-        ("paddle", 2.0 * FRAME),
+    for (name, dt, bound) in [
+        ("balloon", 1.0 / 30.0, 1e-3),
+        ("cloth_on_ball", 1.0 / 30.0, 1e-3),
+        ("slope", 1.0 / 30.0, 3e-3),
+        ("paddle", FRAME, 1e-3),
+        ("paddle", 2.0 * FRAME, 1e-3),
     ] {
         let mut app = shipped(name, Integrator::ImplicitEuler, dt);
         let energy = |app: &App| {
@@ -767,7 +769,7 @@ fn implicit_euler_lands_gas_bodies_and_cloths_at_a_frames_step() {
             step(&mut app, 1);
             most = most.max(energy(&app));
         }
-        if most > start * (1.0 + 1e-3) {
+        if most > start * (1.0 + bound) {
             failures.push(format!("{name} at {dt} s: {most} J from {start} J"));
         }
     }
@@ -1267,30 +1269,44 @@ fn box_on_the_ground_slides_as_coulomb_says(integrator: Integrator) {
     }
 }
 
-/// The shipped `slope` under VBD at a frame's step and at two: the box on the 35° slope
-/// (tan 35° = 0.70 over μ = 0.5) slides down onto the ground, as it does under symplectic Euler
-/// at 1e-4 s, and the box on the 20° slope (0.36 under it) holds: in 3 s its centre moves 0.3
-/// mm as it settles, under symplectic Euler 2 mm. Before the groups slid as a whole
-/// (`contact::slide`), the steep box stood still at 1/120 s and larger.
+/// The shipped `slope` under VBD and implicit Euler at a frame's step and at two: the box on the
+/// 35° slope (tan 35° = 0.70 over μ = 0.5) slides down onto the ground, as it does under
+/// symplectic Euler at 1e-4 s, and the box on the 20° slope (0.36 under it) holds: it settles
+/// in its first second (its centre moves 1.9 mm under symplectic Euler, 0.7 and 2.5 mm under
+/// implicit Euler at 1/60 and 1/30 s) and then stays. Before the groups slid as a whole
+/// (`contact::slide`), the steep box stood still under VBD at 1/120 s and larger; before
+/// implicit Euler's surface friction held whole bodies, the gentle box crept down its slope at
+/// 2.6 cm/s at 1/60 s.
 #[test]
-fn vbd_slides_the_steep_slopes_box_and_holds_the_gentle_ones_at_a_frames_step() {
+fn vbd_and_implicit_euler_slide_the_steep_slopes_box_and_hold_the_gentle_one_at_a_frames_step() {
     // Particles 0–24 are the gentle slope's box, 25–49 the steep one's.
     let centre = |app: &App, r: std::ops::Range<usize>| {
         let x = &solver(app).x()[r.clone()];
         x.iter().copied().sum::<DVec2>() / r.len() as f64
     };
-    for dt in [FRAME, 2.0 * FRAME] {
-        let mut app = shipped("slope", Integrator::Vbd, dt);
-        let (gentle, steep) = (centre(&app, 0..25), centre(&app, 25..50));
-        step(&mut app, (3.0 / dt).round() as u64);
-        let crept = (centre(&app, 0..25) - gentle).length();
-        assert!(crept < 1e-3, "at {dt} s the gentle box crept {crept} m");
-        let end = centre(&app, 25..50).y;
-        assert!(
-            end < 0.1,
-            "at {dt} s the steep box's centre is at {end} m, from {} m; on the ground it rests \
-             at 0.04 m",
-            steep.y
-        );
+    for integrator in [Integrator::Vbd, Integrator::ImplicitEuler] {
+        for dt in [FRAME, 2.0 * FRAME] {
+            let mut app = shipped("slope", integrator, dt);
+            let (gentle, steep) = (centre(&app, 0..25), centre(&app, 25..50));
+            step(&mut app, (1.0 / dt).round() as u64);
+            let settled = centre(&app, 0..25);
+            step(&mut app, (2.0 / dt).round() as u64);
+            let (settling, crept) = (
+                (settled - gentle).length(),
+                (centre(&app, 0..25) - settled).length(),
+            );
+            assert!(
+                settling < 3e-3 && crept < 1e-4,
+                "{integrator:?} at {dt} s: the gentle box moved {settling} m in its first second \
+                 and crept {crept} m in the next two"
+            );
+            let end = centre(&app, 25..50).y;
+            assert!(
+                end < 0.1,
+                "{integrator:?} at {dt} s: the steep box's centre is at {end} m, from {} m; on \
+                 the ground it rests at 0.04 m",
+                steep.y
+            );
+        }
     }
 }

@@ -177,6 +177,16 @@ impl Support {
         held.then(|| self.normal[i])
     }
 
+    /// Particle `i`'s contact with an obstacle at the end of the step's last solve, if one held
+    /// it: the obstacle, the surface's normal, and the contact force of the solve's equation
+    /// (as [`Self::note_reactions`] reads it), `mass` the particle's.
+    pub(crate) fn on_obstacle(&self, i: usize, mass: f64) -> Option<(usize, DVec2, DVec2)> {
+        let o = *self.obstacle.get(i)?;
+        let own = self.push[i] * ((self.gain[i] - 1.0) * self.stiffness * mass);
+        let force = self.force[i] - own + self.eased[i];
+        (o != NO_OBSTACLE && force != DVec2::ZERO).then(|| (o as usize, self.normal[i], force))
+    }
+
     /// No contact this step: no force.
     pub(crate) fn start_without(&mut self) {
         self.force.clear();

@@ -30,8 +30,9 @@ pub struct Scratch {
     pub(crate) pairs: SpringBuffers,
     /// Implicit Euler: the gas bodies' share of the Newton matrix (empty without them).
     pub(super) gas: GasJacobian,
-    /// Implicit Euler: the bodies (groups joined by springs) the ground's friction slows as a
-    /// whole ([`super::implicit_euler`]'s `rub`).
+    /// Implicit Euler: the bodies (groups joined by springs) that the friction of the ground and
+    /// of the obstacles slows as a whole ([`super::implicit_euler`]), with each particle's
+    /// contact at the step's end.
     pub(super) groups: Slides,
     /// Implicit Euler's Newton steps so far, and its time steps.
     pub(super) newton_steps: u64,

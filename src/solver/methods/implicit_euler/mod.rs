@@ -13,6 +13,7 @@ pub use ground::Ground;
 use super::evaluate::forces_at;
 use super::scratch::Scratch;
 use crate::solver::contact::inside::InSolve;
+use crate::solver::contact::slide::{Contact, LEFT_ALONE, NO_CONTACT};
 use crate::solver::forces::stiffness;
 use crate::solver::state::State;
 use crate::solver::threads::Threads;
@@ -180,6 +181,9 @@ pub fn implicit_euler(
     if let Some(g) = ground {
         ground::rub(s, sc, h2, g.friction, threads);
     }
+    if let Some(c) = contact {
+        rub_surfaces(s, sc, c, dt);
+    }
     if newton > 1 {
         sc.cg.dv.copy_from_slice(&sc.sum_u);
     }
@@ -284,6 +288,54 @@ fn hold_to_contact(
             sc.x[i].y = sc.x[i].y.max(floor);
             s.v[i] = (sc.x[i] - s.x[i]) * inv_h;
         }
+    }
+}
+
+/// Coulomb friction on the obstacles' surfaces, body by body, after the step's last Newton step
+/// ([`crate::solver::contact::slide::Slides::rub`]): each group of particles joined by springs
+/// that one still surface holds has its velocity along the surface slowed as a whole, within
+/// Coulomb's cone at the contact forces the solves learned ([`Support::on_obstacle`]). Groups
+/// the ground holds are its own friction's ([`ground`]'s `rub`); those on a moving surface, an
+/// engine's body, or surfaces of two directions are left to the projections' friction.
+///
+/// Why: the projection takes back a particle's sliding by at most μ times its own push in that
+/// projection, and once the solves carry the body's weight, the last projection pushes little.
+/// The `slope` scene's gentle box (20°, tan 20° = 0.36 under μ = 0.5) crept down its slope at a
+/// steady 2.6 cm/s at 1/60 s and 7.3 cm/s at 1/30 s (`docs/performance-log.md`, 2026-12-07).
+///
+/// [`Support::on_obstacle`]: crate::solver::contact::support::Support::on_obstacle
+fn rub_surfaces(s: &mut State, sc: &mut Scratch, c: &InSolve, dt: f64) {
+    let friction = c.friction();
+    if friction == 0.0 || c.obstacles().is_empty() || !sc.support.acted() {
+        return;
+    }
+    sc.groups.ready(s);
+    let Scratch {
+        groups,
+        support,
+        cg,
+        ..
+    } = sc;
+    let feels = |o: usize| c.reactions().is_some_and(|r| r.feels(o));
+    let mut any = false;
+    for (i, contact) in groups.contacts.iter_mut().enumerate() {
+        *contact = if cg.filter.get(i) == Some(&cg::HELD) {
+            LEFT_ALONE
+        } else {
+            match support.on_obstacle(i, s.mass[i]) {
+                None => NO_CONTACT,
+                Some((o, _, _)) if c.obstacles()[o].moves() || feels(o) => LEFT_ALONE,
+                Some((_, normal, force)) => Contact {
+                    normal,
+                    force: force.dot(normal).max(0.0),
+                    along: force.dot(normal.perp()),
+                },
+            }
+        };
+        any |= *contact != NO_CONTACT;
+    }
+    if any {
+        groups.rub(&groups.contacts, (&mut s.v, &s.mass), friction, dt);
     }
 }
 
