@@ -187,6 +187,11 @@ impl Support {
         (o != NO_OBSTACLE && force != DVec2::ZERO).then(|| (o as usize, self.normal[i], force))
     }
 
+    /// Particle `i`'s contact force, N (none where no contact acted this step).
+    pub(crate) fn force(&self, i: usize) -> DVec2 {
+        self.force.get(i).copied().unwrap_or(DVec2::ZERO)
+    }
+
     /// No contact this step: no force.
     pub(crate) fn start_without(&mut self) {
         self.force.clear();

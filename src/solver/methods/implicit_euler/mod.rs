@@ -2,10 +2,12 @@
 //! by block-Jacobi-preconditioned conjugate gradients on the pool's threads. It computes the
 //! end-of-step velocity v1 from the start-of-step state; the position update follows in the
 //! step's drift pass ([`crate::solver::step`]). Beside this file: the linear solve with its
-//! row filter ([`cg`]) and the ground held inside it ([`ground`]).
+//! row filter ([`cg`]), the ground held inside it ([`ground`]) and the line search along the
+//! Newton steps after the first ([`search`]).
 
 mod cg;
 mod ground;
+mod search;
 
 pub use cg::CgSettings;
 pub use ground::Ground;
@@ -35,7 +37,8 @@ pub const CONTACT_NEWTON: u32 = 4;
 /// step's Δv, with D = ∂f/∂v the dashpots' damping matrix and K0 the springs' Jacobian plus
 /// the gas bodies' positive semi-definite part ([`GasJacobian`]).
 /// Each further step linearises at x_k = x0 + h v_k: (M − h² K_k) δ = M (v0 − v_k) + h f(x_k),
-/// v_{k+1} = v_k + δ, which converges to the exact backward Euler step. K is the spring Jacobian
+/// v_{k+1} = v_k + α δ (α = 1 unless the full step overshoots, [`search`]), which converges to
+/// the exact backward Euler step. K is the spring Jacobian
 /// with the transverse term of compressed springs dropped (coefficient max(0, 1 − L/l)), which
 /// keeps M − h² K symmetric positive definite; the residual is exact, so the iteration still
 /// converges to the exact step, only the rate changes. Pinned particles are held (their rows
@@ -108,13 +111,24 @@ pub fn implicit_euler(
         |a, b| a + b,
     );
     let linear = (h2, b_norm2.element_sum(), settings);
-    newton_step(s, sc, dt, linear, (contact, ground), newton > 1, threads);
+    // The first step is the classic linearised one, whose right-hand side is not the residual
+    // at its start: the line search serves the steps after it ([`search`]).
+    newton_step(
+        s,
+        sc,
+        dt,
+        linear,
+        (contact, ground),
+        (newton > 1, None),
+        threads,
+    );
     if newton > 1 {
         // The first step's Δv warm-starts the next time step's first solve.
         let sc = &mut *sc;
         sc.sum_u.copy_from_slice(&sc.cg.dv);
     }
 
+    let searched = Some(gravity);
     for k in 1..newton {
         // x_k = x0 + h v_k and f(x_k), into the stage buffers.
         let sc = &mut *sc;
@@ -170,7 +184,7 @@ pub fn implicit_euler(
             dt,
             linear,
             (contact, ground),
-            k + 1 < newton,
+            (k + 1 < newton, searched),
             threads,
         );
     }
@@ -194,13 +208,14 @@ pub fn implicit_euler(
 /// One Newton step's linear solve for the right-hand side in `sc.cg.z` (`linear`: h², |b|²
 /// and the CG settings), with contact inside it: the contact forces added to b before the
 /// solve, and the end positions held out of contact after it.
+#[allow(clippy::too_many_arguments)]
 fn newton_step(
     s: &mut State,
     sc: &mut Scratch,
     dt: f64,
     (h2, b_norm2, settings): (f64, f64, CgSettings),
     (contact, ground): (Option<&InSolve>, Option<Ground>),
-    more: bool,
+    (more, searched): (bool, Option<DVec2>),
     threads: &Threads,
 ) {
     let b_norm2 = with_support(s, sc, dt, contact, b_norm2);
@@ -210,9 +225,15 @@ fn newton_step(
         }
         None => {
             cg::unfiltered(&mut sc.cg.filter, &s.inv_mass);
+            if searched.is_some() {
+                sc.cg.b.clone_from(&sc.cg.z);
+            }
             cg::solve(s, sc, h2, b_norm2, settings, threads);
             cg::add_to_velocities(s, &sc.cg.dv, threads);
         }
+    }
+    if let Some(gravity) = searched {
+        search::along_step(s, sc, dt, gravity, threads);
     }
     if let Some(c) = contact {
         hold_to_contact(s, sc, dt, c, ground, more.then_some((settings, threads)));
