@@ -246,6 +246,11 @@ impl<'a> InSolve<'a> {
         self.obstacles
     }
 
+    /// The step (or substep) this contact is for, s.
+    pub(crate) fn dt(&self) -> f64 {
+        self.dt
+    }
+
     /// Where the contacts' impulses are noted, when some obstacles stand for bodies.
     pub(crate) fn reactions(&self) -> Option<&'a Reactions> {
         self.reactions

@@ -19,16 +19,21 @@
 //!
 //! ½ (s/h²) M (δ − δ*)² + μ Λ |ū + δ|,  δ* = Σ m (y − x)·t / M,
 //!
-//! with ū the contacts' sliding along t, weighted by the normal forces the sweep met there.
+//! with ū the contacts' sliding along t relative to the surface, weighted by the normal forces
+//! the sweep met there.
 //! Its minimiser holds the group still where |ū + δ*| ≤ b = μ Λ h²/(s M), and takes b off its
 //! way otherwise. Λ is the larger of two: what stops the group's own way into the surface (b =
-//! μ d, d the group's mean way from the step's start toward y into the surface, past the gap
+//! μ d, d the group's mean way from the step's start toward y into the surface (as the surface
+//! moves), past the gap
 //! its contacts started at: g h² for a body at rest on the ground, Λ its weight), and the
 //! normal forces the sweep met at its contacts (they carry the load of the bodies stacked on
 //! it). The vertices' own steps still hold each contact with μ times its push, so a body at
-//! rest stays put to the last particle. A group with a pinned particle, or touching a moving
-//! surface, a body another engine moves, or surfaces of more than one direction (a box in a
-//! corner, a cloth over a ball) takes no such step.
+//! rest stays put to the last particle. A group with a pinned particle, or touching a body
+//! another engine moves, or surfaces of more than one direction (a box in a corner, a cloth over
+//! a ball) takes no such step. On a surface that moves (a kinematic obstacle's), the sliding and
+//! the way in are the group's relative to the surface: left to the vertices' friction, the
+//! `paddle`'s strip rode its turning paddle up to 0.67 m at 1/30 s, where it slides off onto the
+//! ground by 2 s under symplectic Euler (`docs/performance-log.md`, 2026-12-08).
 //!
 //! The groups serve implicit Euler too, whose friction after the solve slows each of them as a
 //! whole: on the ground (`methods::implicit_euler`'s `rub`) and on an obstacle ([`Slides::rub`]).
@@ -39,7 +44,8 @@ use crate::solver::state::State;
 use glam::DVec2;
 
 /// A vertex's contact in the last sweep: the surface's normal and the normal force its block
-/// step met there, N ([`NO_CONTACT`] for none, [`MOVING`] for a surface that moves). Under
+/// step met there, N ([`NO_CONTACT`] for none, [`LEFT_ALONE`] for a body another engine moves),
+/// and how far the surface moved there over the step. Under
 /// implicit Euler, a particle's contact at the step's end, with the force along the surface
 /// (its tangent `normal.perp()`) that the projections' friction gave it already, N.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -47,6 +53,8 @@ pub(crate) struct Contact {
     pub normal: DVec2,
     pub force: f64,
     pub along: f64,
+    /// How far the surface moves over the step where the contact is (0 for a still one).
+    pub shift: DVec2,
 }
 
 /// No contact in the last sweep.
@@ -54,18 +62,19 @@ pub(crate) const NO_CONTACT: Contact = Contact {
     normal: DVec2::ZERO,
     force: 0.0,
     along: 0.0,
+    shift: DVec2::ZERO,
 };
 
-/// A contact whose group must take no step: with a surface that moves, with a body another
-/// engine moves, or (implicit Euler) with the ground that its own friction rubs.
+/// A contact whose group must take no step: with a body another engine moves, or (implicit
+/// Euler) with a surface that moves, or the ground that its own friction rubs.
 pub(crate) const LEFT_ALONE: Contact = Contact {
     normal: DVec2::ZERO,
     force: MOVING,
     along: 0.0,
+    shift: DVec2::ZERO,
 };
 
-/// The force of a contact with a surface that moves, or with a body another engine moves: its
-/// group takes no step.
+/// The force of a contact whose group takes no step ([`LEFT_ALONE`]).
 const MOVING: f64 = -1.0;
 
 /// How far apart two contacts' normals may point and still be one surface's: cos of 0.1°.
@@ -85,18 +94,21 @@ impl Contact {
         let Some(held) = held else {
             return NO_CONTACT;
         };
-        let still = held.obstacle.is_none_or(|o| {
-            !c.obstacles()[o].moves() && !c.reactions().is_some_and(|r| r.feels(o))
-        });
-        if !still {
+        let felt = held
+            .obstacle
+            .is_some_and(|o| c.reactions().is_some_and(|r| r.feels(o)));
+        let moving = held.obstacle.filter(|&o| c.obstacles()[o].moves());
+        if felt {
             return LEFT_ALONE;
         }
+        let shift = moving.map_or(DVec2::ZERO, |o| c.obstacles()[o].velocity_at(end) * c.dt());
         let push = end - free;
         let force = DVec2::new(h[0] * push.x + h[1] * push.y, h[1] * push.x + h[2] * push.y);
         Contact {
             normal: held.normal,
             force: held.normal.dot(force).max(0.0),
             along: 0.0,
+            shift,
         }
     }
 }
@@ -213,7 +225,7 @@ impl Slides {
             for &i in members {
                 let i = i as usize;
                 pull += mass[i] * (y[i] - x[i]).dot(t);
-                into -= mass[i] * (y[i] - x0[i]).dot(normal);
+                into -= mass[i] * (y[i] - x0[i] - held.shift).dot(normal);
             }
             let m = self.mass[g];
             // Friction's reach: μ times the normal force over the block's stiffness, that of the
@@ -303,6 +315,8 @@ struct GroupContact {
     /// The normal forces summed, and the forces along the tangent.
     force: f64,
     along: f64,
+    /// The surface's motion where the contacts are, weighted by their normal forces.
+    shift: DVec2,
 }
 
 /// A group's contacts, `moved(i)` member `i`'s motion (a displacement, or a velocity); `None`
@@ -315,6 +329,7 @@ fn contact_of(
 ) -> Option<GroupContact> {
     let mut normal = None;
     let (mut force, mut along, mut sliding, mut gap) = (0.0, 0.0, 0.0, f64::INFINITY);
+    let mut shift = DVec2::ZERO;
     for &i in members {
         let i = i as usize;
         let c = contacts[i];
@@ -328,9 +343,10 @@ fn contact_of(
         if n.dot(c.normal) < ONE_DIRECTION {
             return None;
         }
-        let moved = moved(i);
+        let moved = moved(i) - c.shift;
         force += c.force;
         along += c.along;
+        shift += c.shift * c.force;
         sliding += c.force * moved.dot(n.perp());
         gap = gap.min((-moved.dot(n)).max(0.0));
     }
@@ -341,6 +357,7 @@ fn contact_of(
         gap,
         force,
         along,
+        shift: shift / force,
     })
 }
 
@@ -376,6 +393,7 @@ mod tests {
                 normal: DVec2::Y,
                 force: push,
                 along: 0.0,
+                shift: DVec2::ZERO,
             };
         }
         let before = x[5];
@@ -414,9 +432,9 @@ mod tests {
     }
 
     /// A group whose contacts face two ways (a box in a corner) takes no step, nor one that
-    /// touches a moving surface.
+    /// touches a body another engine moves.
     #[test]
-    fn a_group_on_two_surfaces_or_a_moving_one_takes_no_step() {
+    fn a_group_on_two_surfaces_or_an_engines_body_takes_no_step() {
         let s = block(3, 2, 0.0);
         let x0 = s.x.clone();
         let y: Vec<DVec2> = x0.iter().map(|p| *p + DVec2::new(0.01, -0.01)).collect();
@@ -425,6 +443,7 @@ mod tests {
                 normal: DVec2::X,
                 force: 1.0,
                 along: 0.0,
+                shift: DVec2::ZERO,
             },
             LEFT_ALONE,
         ] {
@@ -434,6 +453,7 @@ mod tests {
                 normal: DVec2::Y,
                 force: 1.0,
                 along: 0.0,
+                shift: DVec2::ZERO,
             };
             slides.contacts[2] = other;
             let mut x = x0.clone();
@@ -443,6 +463,38 @@ mod tests {
             );
             assert_eq!(x, x0);
         }
+    }
+
+    /// On a surface that moves, the step is the group's relative to it: the block of
+    /// [`slid`]'s test on a floor that slides 2 cm to the right over the step, its contacts moved
+    /// 3 cm (1 cm over the floor), its inertia pulling it 5 mm further. Under μ = 4 it stops on
+    /// the floor (back to 2 cm, the floor's way); without friction it goes the 5 mm; under μ = 0.3
+    /// its way over the floor, 1.5 cm, less μ times its 1 cm way in, 3 mm.
+    #[test]
+    fn a_group_on_a_moving_floor_slides_over_it() {
+        let slid_on = |mu: f64| {
+            let s = block(4, 2, 0.0);
+            let x0 = s.x.clone();
+            let mut x: Vec<DVec2> = x0.iter().map(|p| *p + DVec2::new(0.03, 0.0)).collect();
+            let y: Vec<DVec2> = x.iter().map(|p| *p + DVec2::new(0.005, -0.01)).collect();
+            let mut slides = Slides::default();
+            slides.ready(&s);
+            for i in 0..4 {
+                slides.contacts[i] = Contact {
+                    normal: DVec2::Y,
+                    force: 1.0,
+                    along: 0.0,
+                    shift: DVec2::new(0.02, 0.0),
+                };
+            }
+            let contacts = slides.contacts.clone();
+            slides.step(&contacts, &mut x, (&y, &x0, &s.mass), INERTIA, mu);
+            x[5].x - x0[5].x
+        };
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
+        assert!(close(slid_on(4.0), 0.02));
+        assert!(close(slid_on(0.0), 0.035));
+        assert!(close(slid_on(0.3), 0.02 + 0.015 - 0.003));
     }
 
     /// Implicit Euler's rub: a 4 × 2 block of 0.16 kg on a 30° slope, its bottom row held with 1 N
@@ -466,6 +518,7 @@ mod tests {
                     normal,
                     force: 1.0,
                     along: -up,
+                    shift: DVec2::ZERO,
                 };
             }
             let mut v = vec![down * 0.5; s.x.len()];

@@ -350,6 +350,7 @@ fn rub_surfaces(s: &mut State, sc: &mut Scratch, c: &InSolve, dt: f64) {
                     normal,
                     force: force.dot(normal).max(0.0),
                     along: force.dot(normal.perp()),
+                    shift: DVec2::ZERO,
                 },
             }
         };
