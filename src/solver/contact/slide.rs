@@ -246,13 +246,7 @@ impl Slides {
             } else {
                 free - budget * way.signum()
             };
-            if delta == 0.0 {
-                continue;
-            }
-            for &i in members {
-                x[i as usize] += t * delta;
-            }
-            moved += 1;
+            moved += usize::from(move_all(members, x, t * delta));
         }
         moved
     }
@@ -291,16 +285,22 @@ impl Slides {
                 / m;
             let (least, most) = (least.max((-own).min(0.0)), most.min((-own).max(0.0)));
             let change = (-held.sliding).clamp(least, most);
-            if change == 0.0 {
-                continue;
-            }
-            for &i in members {
-                v[i as usize] += t * change;
-            }
-            slowed += 1;
+            slowed += usize::from(move_all(members, v, t * change));
         }
         slowed
     }
+}
+
+/// Adds `by` to every member's entry of `out` (a position or a velocity); whether it moved
+/// them.
+fn move_all(members: &[u32], out: &mut [DVec2], by: DVec2) -> bool {
+    if by == DVec2::ZERO {
+        return false;
+    }
+    for &i in members {
+        out[i as usize] += by;
+    }
+    true
 }
 
 /// A group's contacts with its one surface.
