@@ -20,14 +20,12 @@
 //! ½ (s/h²) M (δ − δ*)² + μ Λ |ū + δ|,  δ* = Σ m (y − x)·t / M,
 //!
 //! with ū the contacts' sliding along t relative to the surface, weighted by the normal forces
-//! the sweep met there.
-//! Its minimiser holds the group still where |ū + δ*| ≤ b = μ Λ h²/(s M), and takes b off its
-//! way otherwise. Λ is the larger of two: what stops the group's own way into the surface (b =
-//! μ d, d the group's mean way from the step's start toward y into the surface (as the surface
-//! moves), past the gap
-//! its contacts started at: g h² for a body at rest on the ground, Λ its weight), and the
-//! normal forces the sweep met at its contacts (they carry the load of the bodies stacked on
-//! it). The vertices' own steps still hold each contact with μ times its push, so a body at
+//! the sweep met there. Its minimiser holds the group still where |ū + δ*| ≤ b = μ Λ h²/(s M),
+//! and takes b off its way otherwise. Λ is the larger of two: what stops the group's own way into
+//! the surface (b = μ d, d the group's mean way from the step's start toward y into the surface
+//! as the surface moves, past the gap its contacts started at: g h² for a body at rest on the
+//! ground, Λ its weight), and the normal forces the sweep met at its contacts (they carry the
+//! load of the bodies stacked on it). The vertices' own steps still hold each contact with μ times its push, so a body at
 //! rest stays put to the last particle. A group with a pinned particle, or touching a body
 //! another engine moves, or surfaces of more than one direction (a box in a corner, a cloth over
 //! a ball) takes no such step. On a surface that moves (a kinematic obstacle's), the sliding and
@@ -45,9 +43,9 @@ use glam::DVec2;
 
 /// A vertex's contact in the last sweep: the surface's normal and the normal force its block
 /// step met there, N ([`NO_CONTACT`] for none, [`LEFT_ALONE`] for a body another engine moves),
-/// and how far the surface moved there over the step. Under
-/// implicit Euler, a particle's contact at the step's end, with the force along the surface
-/// (its tangent `normal.perp()`) that the projections' friction gave it already, N.
+/// and how far the surface moved there over the step. Under implicit Euler, a particle's contact
+/// at the step's end, with the force along the surface (its tangent `normal.perp()`) that the
+/// projections' friction gave it already, N.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Contact {
     pub normal: DVec2,
@@ -69,13 +67,13 @@ pub(crate) const NO_CONTACT: Contact = Contact {
 /// Euler) with a surface that moves, or the ground that its own friction rubs.
 pub(crate) const LEFT_ALONE: Contact = Contact {
     normal: DVec2::ZERO,
-    force: MOVING,
+    force: NO_STEP,
     along: 0.0,
     shift: DVec2::ZERO,
 };
 
 /// The force of a contact whose group takes no step ([`LEFT_ALONE`]).
-const MOVING: f64 = -1.0;
+const NO_STEP: f64 = -1.0;
 
 /// How far apart two contacts' normals may point and still be one surface's: cos of 0.1°.
 const ONE_DIRECTION: f64 = 0.999_998_5;
@@ -94,14 +92,17 @@ impl Contact {
         let Some(held) = held else {
             return NO_CONTACT;
         };
-        let felt = held
+        if held
             .obstacle
-            .is_some_and(|o| c.reactions().is_some_and(|r| r.feels(o)));
-        let moving = held.obstacle.filter(|&o| c.obstacles()[o].moves());
-        if felt {
+            .is_some_and(|o| c.reactions().is_some_and(|r| r.feels(o)))
+        {
             return LEFT_ALONE;
         }
-        let shift = moving.map_or(DVec2::ZERO, |o| c.obstacles()[o].velocity_at(end) * c.dt());
+        let moving = held
+            .obstacle
+            .map(|o| &c.obstacles()[o])
+            .filter(|o| o.moves());
+        let shift = moving.map_or(DVec2::ZERO, |o| o.velocity_at(end) * c.dt());
         let push = end - free;
         let force = DVec2::new(h[0] * push.x + h[1] * push.y, h[1] * push.x + h[2] * push.y);
         Contact {
@@ -336,7 +337,7 @@ fn contact_of(
         if c == NO_CONTACT {
             continue;
         }
-        if c.force == MOVING {
+        if c.force == NO_STEP {
             return None;
         }
         let n = *normal.get_or_insert(c.normal);

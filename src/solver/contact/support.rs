@@ -158,8 +158,7 @@ impl Support {
             if (*f == DVec2::ZERO && self.eased[i] == DVec2::ZERO) || o == NO_OBSTACLE {
                 continue;
             }
-            let own = self.push[i] * ((self.gain[i] - 1.0) * self.stiffness * mass[i]);
-            let held = *f - own + self.eased[i];
+            let held = self.held_force(i, mass[i]);
             c.note(
                 o as usize,
                 i,
@@ -182,9 +181,16 @@ impl Support {
     /// (as [`Self::note_reactions`] reads it), `mass` the particle's.
     pub(crate) fn on_obstacle(&self, i: usize, mass: f64) -> Option<(usize, DVec2, DVec2)> {
         let o = *self.obstacle.get(i)?;
-        let own = self.push[i] * ((self.gain[i] - 1.0) * self.stiffness * mass);
-        let force = self.force[i] - own + self.eased[i];
+        let force = self.held_force(i, mass);
         (o != NO_OBSTACLE && force != DVec2::ZERO).then(|| (o as usize, self.normal[i], force))
+    }
+
+    /// Particle `i`'s contact force in the solve's equation after the last projection, `mass`
+    /// the particle's: the learned force, less the over-relaxation of the last push, plus what
+    /// the last projection eased away (see [`Self::note_reactions`]).
+    fn held_force(&self, i: usize, mass: f64) -> DVec2 {
+        let own = self.push[i] * ((self.gain[i] - 1.0) * self.stiffness * mass);
+        self.force[i] - own + self.eased[i]
     }
 
     /// Particle `i`'s contact force, N (none where no contact acted this step).

@@ -130,19 +130,22 @@ pub fn implicit_euler(
 
     let searched = Some(gravity);
     for k in 1..newton {
-        // x_k = x0 + h v_k and f(x_k), into the stage buffers.
+        // x_k = x0 + h v_k and f(x_k), into the stage buffers: the last step's line search left
+        // them there where no contact moved the iterate since ([`search::along_step`]).
         let sc = &mut *sc;
-        threads.each(
-            springs,
-            (&mut sc.x[..], &s.x[..], &s.v[..]),
-            |(xk, x, v)| {
-                for i in 0..xk.len() {
-                    xk[i] = x[i] + v[i] * dt;
-                }
-            },
-        );
-        // f(x_k, v_k): the dashpots see the iterate's velocity.
-        forces_at(s, &mut sc.pairs, &mut sc.f, (&sc.x, &s.v), gravity, threads);
+        if k == 1 || contact.is_some() {
+            threads.each(
+                springs,
+                (&mut sc.x[..], &s.x[..], &s.v[..]),
+                |(xk, x, v)| {
+                    for i in 0..xk.len() {
+                        xk[i] = x[i] + v[i] * dt;
+                    }
+                },
+            );
+            // f(x_k, v_k): the dashpots see the iterate's velocity.
+            forces_at(s, &mut sc.pairs, &mut sc.f, (&sc.x, &s.v), gravity, threads);
+        }
         let sc = &mut *sc;
         let cg = &mut sc.cg;
         stiffness::blocks_threaded(threads, &s.springs, &sc.x, &mut cg.blocks);

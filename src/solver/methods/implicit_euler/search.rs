@@ -44,14 +44,14 @@ const SHORTEST: f64 = 1.0 / 16.0;
 /// Shortens the Newton step just added to the velocities (`sc.cg.dv`, the solution of
 /// A δ = `sc.cg.b` in the rows `sc.cg.filter` lets through) where the full step overshoots (see
 /// the module's notes); `sc.stage_v` holds v0. Leaves f(x0 + h v) in `sc.f` and x0 + h v in
-/// `sc.x`. Returns the share of the step kept.
+/// `sc.x`, for the next Newton step.
 pub(super) fn along_step(
     s: &mut State,
     sc: &mut Scratch,
     dt: f64,
     gravity: DVec2,
     threads: &Threads,
-) -> f64 {
+) {
     let n = s.x.len();
     let cg = &sc.cg;
     let mut start = 0.0;
@@ -62,7 +62,7 @@ pub(super) fn along_step(
     }
     if start <= 0.0 || !start.is_finite() {
         slope_at(s, sc, dt, gravity, threads);
-        return 1.0;
+        return;
     }
     let mut alpha = 1.0;
     let mut slope = slope_at(s, sc, dt, gravity, threads);
@@ -82,7 +82,6 @@ pub(super) fn along_step(
         alpha = next;
         slope = slope_at(s, sc, dt, gravity, threads);
     }
-    alpha
 }
 
 /// g = r(v)·δ at the velocities `s.v` (the filtered rows' δ alone), the forces f(x0 + h v)
