@@ -59,6 +59,9 @@ pub struct InSolve<'a> {
     /// Where the step began, when each pair that meets within it is pushed apart along the
     /// line it met on ([`Self::holding_sides`]).
     met_from: Option<&'a [DVec2]>,
+    /// Passes over the pairs in each projection ([`Self::with_pair_passes`]); 1 unless a
+    /// method asks for more.
+    pair_passes: usize,
 }
 
 /// Where the step's moving obstacles stand at each stage of XPBD's substeps
@@ -160,6 +163,7 @@ impl<'a> InSolve<'a> {
             heading,
             reactions: around.reactions,
             met_from: None,
+            pair_passes: 1,
         })
     }
 
@@ -180,6 +184,30 @@ impl<'a> InSolve<'a> {
             met_from: Some(from),
             ..*self
         }
+    }
+
+    /// This contact with `passes` passes over the particle pairs in each projection
+    /// ([`Self::project`]), each followed by the surfaces' hold: implicit Euler's few Newton
+    /// steps, each closed by one projection, otherwise ended a step with pairs at half of 2r.
+    pub(crate) fn with_pair_passes(&self, passes: usize) -> InSolve<'a> {
+        InSolve {
+            pair_passes: passes.max(1),
+            ..*self
+        }
+    }
+
+    /// Free particle `i`'s iterate `x` put back out of the obstacles and the ground along
+    /// their normals alone, with no friction and no reaction noted; returns whether it was
+    /// inside one.
+    pub(crate) fn push_out(&self, i: usize, x: &mut DVec2, from: DVec2) -> bool {
+        let before = *x;
+        InSolve {
+            friction: 0.0,
+            reactions: None,
+            ..*self
+        }
+        .keep_out(i, x, from);
+        *x != before
     }
 
     /// This contact as XPBD's substeps read it, `stage` of a step of `substeps`: stage 0 at
@@ -411,22 +439,43 @@ impl<'a> InSolve<'a> {
 
     /// The whole iterate: pairs pushed apart, then every free particle kept out of the
     /// surfaces (which wins where the two disagree: a particle pressed into the ground by
-    /// another stays on it, and the other moves). `from` is where the step began. Calls
-    /// `each(i, x, held)` for every free particle where it ends, with the last surface it
-    /// touched.
+    /// another stays on it, and the other moves), as many times as [`Self::with_pair_passes`]
+    /// asks. `from` is where the step began. Calls `each(i, x, held)` for every free particle
+    /// where it ends, with the last surface it touched in any pass (`touched` keeps them
+    /// between passes): one that an earlier pass put on a surface is still held by it, so
+    /// that an engine's body under it still takes its weight (without, crates fell through
+    /// the net they rested in).
     pub(crate) fn project(
         &self,
         x: &mut [DVec2],
         from: &[DVec2],
         w: &[f64],
-        scratch: &mut [DVec2],
+        (scratch, touched): (&mut [DVec2], &mut Vec<Option<Held>>),
         mut each: impl FnMut(usize, DVec2, Option<Held>),
     ) {
-        self.separate(x, w, scratch);
-        for (i, ((x, &from), &w)) in x.iter_mut().zip(from).zip(w).enumerate() {
-            if w != 0.0 {
-                let held = self.keep_out(i, x, from);
-                each(i, *x, held);
+        let passes = if self.pairs.is_some() {
+            self.pair_passes
+        } else {
+            1
+        };
+        touched.clear();
+        if passes > 1 {
+            touched.resize(x.len(), None);
+        }
+        for pass in 1..=passes {
+            self.separate(x, w, scratch);
+            let last = pass == passes;
+            for (i, ((x, &from), &w)) in x.iter_mut().zip(from).zip(w).enumerate() {
+                if w != 0.0 {
+                    let held = self.keep_out(i, x, from);
+                    if !last {
+                        if held.is_some() {
+                            touched[i] = held;
+                        }
+                    } else {
+                        each(i, *x, held.or_else(|| touched.get(i).copied().flatten()));
+                    }
+                }
             }
         }
     }

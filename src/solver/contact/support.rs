@@ -13,7 +13,7 @@
 //! kept factor answers how every particle would move under the change, and that answer sizes
 //! it (`docs/performance-log.md`, 2026-12-07).
 
-use super::inside::InSolve;
+use super::inside::{Held, InSolve};
 use crate::solver::state::State;
 use glam::DVec2;
 
@@ -53,8 +53,9 @@ const LINE_SEARCH_FROM: f64 = 2.0;
 /// warm-start their impulses), an impact's force launched the particles on the next step (the
 /// pile rose to 893 J under projective dynamics and 11,932 J under BDF2).
 ///
-/// Under projective dynamics and BDF2's backward Euler steps, [`Self::line_search`] then
-/// resizes each iteration's change of the forces.
+/// Under projective dynamics, BDF2's backward Euler steps and implicit Euler's Newton steps,
+/// [`Self::line_search`] then resizes each iteration's change of the forces (under implicit
+/// Euler body by body, [`Self::search_by_body`]).
 #[derive(Debug, Default, Clone)]
 pub struct Support {
     /// Each particle's contact force, N.
@@ -75,8 +76,14 @@ pub struct Support {
     push: Vec<DVec2>,
     /// The last projection's s/ĥ².
     stiffness: f64,
-    /// The free particles' mass, kg: the line search's bound ([`Self::line_search`]).
-    free_mass: f64,
+    /// Each particle's body for the line search ([`Self::search_by_body`]): all 0, one body,
+    /// unless a method asks for each body alone.
+    body: Vec<u32>,
+    /// Each body's free particles' mass, kg: the line search's bound ([`Self::line_search`]).
+    free_mass: Vec<f64>,
+    /// The line search's sums (descent, curvature, changed mass) and step α, body by body.
+    sums: Vec<(f64, f64, f64)>,
+    alpha: Vec<f64>,
     /// The change of each particle's force in the last projection, where it enters the line
     /// search (zero elsewhere).
     change: Vec<DVec2>,
@@ -85,6 +92,9 @@ pub struct Support {
     eased: Vec<DVec2>,
     /// Whether a projection of this step has pushed any particle ([`Self::acted`]).
     acted: bool,
+    /// The surface each particle last touched in a projection's earlier passes
+    /// ([`InSolve::project`]).
+    touched: Vec<Option<Held>>,
 }
 
 /// No obstacle holds the particle.
@@ -94,20 +104,12 @@ impl Support {
     /// Readies the buffers for a step of the state's particles starting from `start`, with no
     /// force; `h2_over_s` is ĥ²/s.
     pub(crate) fn start(&mut self, s: &State, start: &[DVec2], h2_over_s: f64) {
-        self.start_relaxed(s, start, h2_over_s, true);
-    }
-
-    /// [`Self::start`] without the over-relaxation (g = 1 for every particle, as implicit
-    /// Euler's Newton steps take it), the line search still where the springs are stiff on the
-    /// step's scale (ĥ² Σk ≥ s m).
-    pub(crate) fn start_unrelaxed(&mut self, s: &State, start: &[DVec2], h2_over_s: f64) {
-        self.start_relaxed(s, start, h2_over_s, false);
-    }
-
-    fn start_relaxed(&mut self, s: &State, start: &[DVec2], h2_over_s: f64, relax: bool) {
         let n = start.len();
         let free = s.mass.iter().zip(&s.inv_mass).filter(|(_, w)| **w != 0.0);
-        self.free_mass = free.map(|(m, _)| m).sum();
+        self.body.clear();
+        self.body.resize(n, 0);
+        self.free_mass.clear();
+        self.free_mass.push(free.map(|(m, _)| m).sum());
         self.force.clear();
         self.force.resize(n, DVec2::ZERO);
         self.gain.clear();
@@ -123,7 +125,7 @@ impl Support {
         for ((g, &m), searched) in self.gain.iter_mut().zip(&s.mass).zip(&mut self.searched) {
             let stiff = 1.0 + h2_over_s * *g / m;
             *searched = stiff >= LINE_SEARCH_FROM;
-            *g = if relax { stiff.min(SUPPORT_GAIN) } else { 1.0 };
+            *g = stiff.min(SUPPORT_GAIN);
         }
         self.last.clear();
         self.last.extend_from_slice(start);
@@ -249,9 +251,10 @@ impl Support {
             eased,
             acted,
             searched,
+            touched,
             ..
         } = self;
-        c.project(x, from, w, scratch, |i, x, held| {
+        c.project(x, from, w, (scratch, touched), |i, x, held| {
             let push = x - before[i];
             if push == DVec2::ZERO && held.is_none() && force[i] == DVec2::ZERO {
                 // Neither touching nor held: nothing to learn, and nothing read until a push
@@ -304,11 +307,31 @@ impl Support {
         any
     }
 
+    /// From this step's start on, [`Self::line_search`] takes each body (particles joined by
+    /// springs) alone, each with its own step α and its own mass as the bound. Why: bodies
+    /// apart share no row of the solve's matrix, so the search's objective is their sum, and
+    /// one α for all of them let one body's contact size another's. Under implicit Euler a
+    /// box wedged at the `slope`'s foot so set the forces holding the other box on its gentle
+    /// slope, which then crept 3.7 mm in 2 s at 1/30 s (1e-9 m alone;
+    /// `docs/performance-log.md`, 2026-12-08).
+    pub(crate) fn search_by_body(&mut self, s: &State) {
+        let n = s.x.len();
+        self.body = super::groups::bodies(&s.springs, n);
+        self.free_mass.clear();
+        self.free_mass.resize(n, 0.0);
+        for ((&b, &m), &w) in self.body.iter().zip(&s.mass).zip(&s.inv_mass) {
+            if w != 0.0 {
+                self.free_mass[b as usize] += m;
+            }
+        }
+    }
+
     /// The step α along the last projection's change δf of the forces, given `answer`, the
     /// solve's answer w to that change ([`Self::change_to_answer`]), with `mass` the particles'
     /// masses: the forces take α δf instead of δf, and the
     /// iterate `x` moves where the next solve would put it, from where the last solve left it
-    /// (before the projection) by α w. Returns α (1, and nothing moved, where there was no
+    /// (before the projection) by α w, body by body where [`Self::search_by_body`] asks.
+    /// Returns the least α of a body that changed (1, and nothing moved, where there was no
     /// change).
     ///
     /// α is the exact line search on the contact's dual problem (the forces' own, for which the
@@ -322,31 +345,44 @@ impl Support {
     /// its lower row's fourfold update (twice that row's mass, the strip's), a box eight rows
     /// high resting on its bottom row α = 2.
     pub(crate) fn line_search(&mut self, x: &mut [DVec2], mass: &[f64], answer: &[DVec2]) -> f64 {
-        let (mut descent, mut curvature, mut changed) = (0.0, 0.0, 0.0);
+        self.sums.clear();
+        self.sums.resize(self.free_mass.len(), (0.0, 0.0, 0.0));
+        let mut any = false;
         for (i, d) in self.change.iter().enumerate() {
             if *d != DVec2::ZERO {
                 let g = self.gain[i];
-                descent += d.length_squared() / (g * self.stiffness * mass[i]);
-                curvature += d.dot(answer[i]);
-                changed += g * mass[i];
+                let (descent, curvature, changed) = &mut self.sums[self.body[i] as usize];
+                *descent += d.length_squared() / (g * self.stiffness * mass[i]);
+                *curvature += d.dot(answer[i]);
+                *changed += g * mass[i];
+                any = true;
             }
         }
-        if changed == 0.0 {
+        if !any {
             return 1.0;
         }
-        let alpha = (descent / curvature).min(self.free_mass / changed);
-        let alpha = if alpha.is_finite() && alpha > 0.0 {
-            alpha
-        } else {
-            1.0
-        };
-        for (f, d) in self.force.iter_mut().zip(&self.change) {
-            *f += *d * (alpha - 1.0);
+        self.alpha.clear();
+        let mut least = f64::INFINITY;
+        for (&(descent, curvature, changed), &free) in self.sums.iter().zip(&self.free_mass) {
+            let alpha = (descent / curvature).min(free / changed);
+            let alpha = if changed != 0.0 && alpha.is_finite() && alpha > 0.0 {
+                alpha
+            } else {
+                1.0
+            };
+            if changed != 0.0 {
+                least = least.min(alpha);
+            }
+            self.alpha.push(alpha);
         }
-        for ((x, &before), &a) in x.iter_mut().zip(&self.before).zip(answer) {
-            *x = before + a * alpha;
+        let (body, alpha) = (&self.body, &self.alpha);
+        for ((f, d), &b) in self.force.iter_mut().zip(&self.change).zip(body) {
+            *f += *d * (alpha[b as usize] - 1.0);
         }
-        alpha
+        for (((x, &before), &a), &b) in x.iter_mut().zip(&self.before).zip(answer).zip(body) {
+            *x = before + a * alpha[b as usize];
+        }
+        least
     }
 }
 
@@ -354,6 +390,7 @@ impl Support {
 mod tests {
     use super::*;
     use crate::solver::fixtures::block;
+    use crate::solver::state::PackedSpring;
 
     /// A block of 3 × 8 particles, its bottom row pushed up by the ground by the same Δ, with a
     /// lone particle beside it (no springs: g = 1, outside the line search) pushed too.
@@ -425,5 +462,80 @@ mod tests {
         let stiff: Vec<DVec2> = rhs.iter().map(|r| *r / (0.02 * 40.0)).collect();
         let alpha = support.line_search(&mut x, &s.mass, &stiff);
         assert!((alpha - 25.0 / 12.0).abs() < 1e-12, "{alpha}");
+    }
+
+    /// Two 3 × 8 blocks side by side, no spring between them, each pushed up on its bottom row
+    /// by the same Δ; the solve answers the first as a rigid block (its exact step 2) and the
+    /// second as a block whose bottom row weighs four particles each (its exact step 1, under
+    /// its bound of 2). Searched body by body, each takes its own step: the first stops whole,
+    /// the second keeps its update, and the least step comes back. One search for both gives
+    /// them one step.
+    #[test]
+    fn the_line_search_by_body_sizes_each_body_alone() {
+        let (w, h) = (3u32, 8u32);
+        let one = (w * h) as usize;
+        let mut s = block(w, h, 0.0);
+        let other = block(w, h, 0.0);
+        s.x.extend(other.x.iter().map(|p| *p + DVec2::new(0.1, 0.0)));
+        s.v.extend(&other.v);
+        s.f.extend(&other.f);
+        s.mass.extend(&other.mass);
+        s.inv_mass.extend(&other.inv_mass);
+        s.springs
+            .extend(other.springs.iter().map(|sp| PackedSpring {
+                a: sp.a + one as u32,
+                b: sp.b + one as u32,
+                ..*sp
+            }));
+        let n = s.x.len();
+        let h2 = 1.0 / 900.0;
+        let stiffness = 1.0 / h2;
+        let up = DVec2::new(0.0, 1e-3);
+        let bottoms: Vec<usize> = (0..w as usize).chain(one..one + w as usize).collect();
+        let pushed = |support: &mut Support, by_body: bool| {
+            support.start(&s, &s.x, h2);
+            if by_body {
+                support.search_by_body(&s);
+            }
+            support.stiffness = stiffness;
+            support.before = s.x.clone();
+            for &i in &bottoms {
+                let rho = support.gain[i] * stiffness * s.mass[i];
+                support.force[i] = up * rho;
+                support.change[i] = up * rho;
+            }
+        };
+        let mut support = Support::default();
+        pushed(&mut support, true);
+        let mut rhs = vec![DVec2::ZERO; n];
+        assert!(support.change_to_answer(h2, &mut rhs));
+        let mass = 0.02 * one as f64;
+        let total: DVec2 = rhs[..one].iter().sum();
+        let answer: Vec<DVec2> = (0..n)
+            .map(|i| {
+                if i < one {
+                    total / mass
+                } else {
+                    rhs[i] / (0.02 * 4.0)
+                }
+            })
+            .collect();
+        let mut x = s.x.clone();
+        let least = support.line_search(&mut x, &s.mass, &answer);
+        assert!((least - 1.0).abs() < 1e-12, "{least}");
+        let whole = up * (mass * stiffness);
+        let held: DVec2 = support.force[..one].iter().sum();
+        assert!((held - whole).length() < 1e-9 * whole.length(), "{held}");
+        let kept: DVec2 = support.force[one..].iter().sum();
+        let update = up * (SUPPORT_GAIN * stiffness * 0.02 * w as f64);
+        assert!((kept - update).length() < 1e-9 * update.length(), "{kept}");
+        // One search for both: the same step for each.
+        pushed(&mut support, false);
+        support.line_search(&mut x, &s.mass, &answer);
+        let (a, b): (DVec2, DVec2) = (
+            support.force[..one].iter().sum(),
+            support.force[one..].iter().sum(),
+        );
+        assert!((a - b).length() < 1e-9 * a.length(), "{a} against {b}");
     }
 }

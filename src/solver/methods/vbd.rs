@@ -534,7 +534,9 @@ pub fn step(
                     // Not the outlines: pushed between the block descent's iterations they
                     // blew the pile up (180 J to 27,000 J at 1/60 s); after the step (pass 6)
                     // they hold it.
-                    c.without_outlines().project(x, x0, w, out, |_, _, _| {});
+                    let held = &mut Vec::new(); // one pass: none kept between passes
+                    c.without_outlines()
+                        .project(x, x0, w, (out, held), |_, _, _| {});
                 }
                 team.wait();
             }

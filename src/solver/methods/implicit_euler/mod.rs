@@ -29,6 +29,15 @@ use glam::DVec2;
 /// ([`ground`]; 2026-12-06, Intel Xeon), 4 leave pairs at 69 % and no cell turned.
 pub const CONTACT_NEWTON: u32 = 4;
 
+/// Passes over the particle pairs in each projection between Newton steps
+/// ([`InSolve::with_pair_passes`]); a pair that meets within the step is pushed apart along
+/// the line it met on ([`InSolve::holding_sides`]). With one pass along each pair's own line,
+/// a fold of `folding_cloth` landing on the strip below it at 1/60 s ended the Newton steps
+/// with pairs at half of 2r, and the pass after the step pushed them out into the springs:
+/// its energy rose from 8.8 J to 52 J, against 8.8 J now from 1/120 to 1/50 s
+/// (`docs/performance-log.md`, 2026-12-08).
+const PAIR_PASSES: usize = 8;
+
 /// Backward Euler by Newton's method on M (v − v0) = h f(x0 + h v), `newton` steps, each linear
 /// solve by block-Jacobi-preconditioned conjugate gradients.
 ///
@@ -64,12 +73,16 @@ pub fn implicit_euler(
     sc.cg.fit(n, springs);
     let h2 = dt * dt;
     if contact.is_some() {
-        // No over-relaxation of the learned forces (g = 1, see `Support`): with projective
-        // dynamics' g of up to 4, the last Newton step's force lifted resting particles off
-        // their contact, where no later projection pulls them back (two soft boxes stacked at
-        // 1/600 s kept 1.9e-5 J of jitter after 5 s, over 4 times the test's bound). The line
-        // search still takes the particles whose springs are stiff on the step's scale.
-        sc.support.start_unrelaxed(s, &s.x, h2);
+        // The learned forces over-relaxed as projective dynamics' are, and searched body by
+        // body ([`Support::search_by_body`]). Unrelaxed (g = 1), a fold of `folding_cloth`
+        // landing at 1/60 s learned a tenth of the force that stops it in four Newton steps,
+        // and the pass after the step pushed the rest out into its springs (8.8 J to 52 J).
+        // That g once lifted resting particles off their contact (two soft boxes stacked at
+        // 1/600 s kept 1.9e-5 J of jitter); that stack's test holds with it now.
+        //
+        // [`Support::search_by_body`]: crate::solver::contact::support::Support::search_by_body
+        sc.support.start(s, &s.x, h2);
+        sc.support.search_by_body(s);
     }
     // Contact in the solve needs Newton steps after the first: the contact forces learned from
     // one step's projection enter the next one's solve ([`CONTACT_NEWTON`]).
@@ -200,6 +213,7 @@ pub fn implicit_euler(
     }
     if let Some(c) = contact {
         rub_surfaces(s, sc, c, dt);
+        hold_out_after_rubbing(s, c, ground, dt);
     }
     if newton > 1 {
         sc.cg.dv.copy_from_slice(&sc.sum_u);
@@ -288,6 +302,7 @@ fn hold_to_contact(
     search: Option<(CgSettings, &Threads)>,
 ) {
     let n = s.x.len();
+    let c = &c.holding_sides(&s.x).with_pair_passes(PAIR_PASSES);
     sc.x.resize(n, DVec2::ZERO);
     sc.contact.resize(c.pair_scratch(), DVec2::ZERO);
     for i in 0..n {
@@ -311,6 +326,25 @@ fn hold_to_contact(
         if s.inv_mass[i] != 0.0 {
             sc.x[i].y = sc.x[i].y.max(floor);
             s.v[i] = (sc.x[i] - s.x[i]) * inv_h;
+        }
+    }
+}
+
+/// Each free particle's end x0 + h v put back out of the surfaces along their normals, where
+/// the friction after the last Newton step moved it in: the ground's and the surfaces' rub
+/// change a whole body's velocity along its surface alike, which for a member against a second
+/// surface points into it (a soft box thrown at a wall at 1/60 s, on the ground as it bounced
+/// back, ended 0.3 mm inside the wall; the `slope`'s box wedged at its foot 2 mm into the slope
+/// every step). The pass after the step answers velocities alone.
+fn hold_out_after_rubbing(s: &mut State, c: &InSolve, ground: Option<Ground>, dt: f64) {
+    let floor = ground.map_or(f64::NEG_INFINITY, |g| g.height);
+    for i in 0..s.x.len() {
+        if s.inv_mass[i] != 0.0 {
+            let mut end = s.x[i] + s.v[i] * dt;
+            if c.push_out(i, &mut end, s.x[i]) || end.y < floor {
+                end.y = end.y.max(floor);
+                s.v[i] = (end - s.x[i]) / dt;
+            }
         }
     }
 }
